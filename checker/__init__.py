@@ -1,0 +1,1 @@
+"""motionchart checker: the command line, scenario runner and (later) the model checker."""

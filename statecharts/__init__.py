@@ -1,0 +1,1 @@
+"""motionchart statecharts: spec loader, expression language, IR, engine and scan semantics."""

@@ -1,0 +1,339 @@
+"""The frozen, typed intermediate representation (IR) of a motionchart specification.
+
+Pipeline position: ``spec/*.yaml`` -> :mod:`statecharts.loader` -> **IR** -> engine,
+checker, renderers.  Every consumer downstream of the loader reads these records and
+nothing else; no module below the loader ever sees YAML.
+
+Records are small frozen slotted dataclasses.  Collections are tuples (ordered, as in
+the spec) so that the IR is hashable and generated artefacts are deterministic.
+Expressions are already parsed and compiled (see :mod:`statecharts.expr`); their
+source text is kept for documentation.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+from statecharts.expr import Assignment, Expr
+
+
+class Confidence(enum.Enum):
+    """Confidence marks of ``shared/reference/domain-facts.md``."""
+
+    CONFIRMED = "C"  # read in a vendor manual page
+    THIRD_PARTY = "C3"  # confirmed by a third-party source only
+    INFERRED = "I"  # follows from confirmed facts or sibling instructions
+    UNCERTAIN = "U"  # weak hint or conflicting sources
+
+
+class StateKind(enum.Enum):
+    ATOMIC = "atomic"
+    COMPOUND = "compound"
+    PARALLEL = "parallel"
+    HISTORY = "history"
+    FINAL = "final"
+
+
+class ChartKind(enum.Enum):
+    AXIS = "axis"
+
+
+class Stage(enum.Enum):
+    """When an instruction's precondition check is evaluated."""
+
+    EXECUTE = "execute"  # in the scan, when the instruction executes
+    MESSAGE = "message"  # at the coarse update, when the axis answers the request
+
+
+@dataclass(frozen=True, slots=True)
+class Location:
+    """Where an element was written: file, 1-based line and column, node path."""
+
+    file: str
+    line: int
+    column: int
+    path: str
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}: {self.path}"
+
+
+@dataclass(frozen=True, slots=True)
+class Provenance:
+    """The documentary basis of an element: a citation and, where we chose, why."""
+
+    source: str
+    interpretation: str | None = None  # id of an Interpretation, e.g. "INT-007"
+
+
+@dataclass(frozen=True, slots=True)
+class Interpretation:
+    """A choice made where the documents are silent, garbled or contradictory."""
+
+    id: str
+    title: str
+    text: str
+    confidence: Confidence
+    evidence: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Variable:
+    """A typed variable with a finite domain (``None`` domain means unbounded real)."""
+
+    name: str
+    type: str  # "bool" | "int" | "enum" | "real"
+    initial: bool | int | float | str
+    domain: tuple[bool | int | str, ...] | None
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class State:
+    id: str
+    name: str
+    kind: StateKind
+    value: int | None
+    parent: str | None
+    children: tuple[str, ...]
+    initial: str | None  # id of the initial child (compound states)
+    history_type: str | None  # "shallow" | "deep" for history pseudo-states
+    entry: tuple[Assignment, ...]
+    exit: tuple[Assignment, ...]
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Transition:
+    id: str
+    source: str
+    target: str | None  # None: targetless (actions only, no exit/entry)
+    event: str | None  # None: eventless (taken as soon as the guard holds)
+    guard: Expr | None
+    actions: tuple[Assignment, ...]
+    priority: int  # lower is tried first among transitions of one state and event
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Event:
+    name: str
+    kind: str  # "request" (from an instruction) | "environment" | "clock"
+    description: str
+    parameters: tuple[str, ...]
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class Chart:
+    id: str
+    name: str
+    kind: ChartKind
+    state_attribute: str  # the axis attribute holding the active state's value
+    axis_types: tuple[str, ...]
+    variables: tuple[Variable, ...]
+    events: tuple[Event, ...]
+    states: tuple[State, ...]
+    transitions: tuple[Transition, ...]
+    root_initial: str
+    description: str
+    provenance: Provenance
+    location: Location
+
+    def state(self, state_id: str) -> State:
+        for s in self.states:
+            if s.id == state_id:
+                return s
+        raise KeyError(state_id)
+
+    def variable(self, name: str) -> Variable:
+        for v in self.variables:
+            if v.name == name:
+                return v
+        raise KeyError(name)
+
+    def ancestors(self, state_id: str) -> tuple[str, ...]:
+        """``state_id`` and its ancestors, innermost first."""
+        chain = []
+        current: str | None = state_id
+        while current is not None:
+            chain.append(current)
+            current = self.state(current).parent
+        return tuple(chain)
+
+    def leaf_states(self) -> tuple[State, ...]:
+        return tuple(
+            s for s in self.states if s.kind in (StateKind.ATOMIC, StateKind.FINAL)
+        )
+
+
+@dataclass(frozen=True, slots=True)
+class TagMember:
+    """A member of the MOTION_INSTRUCTION data type (a bit or an integer)."""
+
+    name: str
+    type: str  # "BOOL" | "INT" | "SINT"
+    bit: int | None  # bit number in FLAGS for BOOL members
+    description: str
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class TagType:
+    name: str  # "MOTION_INSTRUCTION"
+    members: tuple[TagMember, ...]
+    internal: tuple[Variable, ...]  # model-only members (e.g. the pending request)
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class TableRow:
+    """One row of an execution table: when the guard holds, do the actions."""
+
+    condition: str  # "prescan" | "rung_false" | "rung_true" | "postscan"
+    guard: Expr | None
+    actions: tuple[Assignment, ...]
+    execute: bool  # the row runs the instruction (checks, then request)
+    description: str
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class ExecutionTable:
+    id: str
+    rows: tuple[TableRow, ...]
+    on_execute: tuple[Assignment, ...]  # done before the checks when the instruction runs
+    on_error: tuple[Assignment, ...]  # done when a check fails (besides ERR/EXERR)
+    on_accept: tuple[Assignment, ...]  # done when the request is posted
+    on_done: tuple[Assignment, ...]  # done when the completion condition holds
+    provenance: Provenance
+
+    def row(self, condition: str) -> TableRow | None:
+        for r in self.rows:
+            if r.condition == condition:
+                return r
+        return None
+
+
+@dataclass(frozen=True, slots=True)
+class Operand:
+    name: str
+    type: str  # "axis" | "tag" | "real" | "int" | "enum"
+    domain: tuple[int | float | str, ...] | None  # finite values the checker explores
+    range: tuple[float, float] | None  # documented valid range, if any
+    text_values: tuple[tuple[str, int], ...]  # "enter as text" names with their numbers
+    default: int | float | str | None
+    description: str
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class Check:
+    """An ordered precondition: when ``fails_when`` holds the instruction errs."""
+
+    id: str
+    fails_when: Expr
+    err: int
+    exerr: int
+    stage: Stage
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Request:
+    """What an accepted instruction asks of the axis chart at the coarse update."""
+
+    event: str
+    actions: tuple[Assignment, ...]  # applied to the axis before the event is sent
+
+
+@dataclass(frozen=True, slots=True)
+class Instruction:
+    id: str  # mnemonic, e.g. "MSO"
+    name: str
+    charts: tuple[str, ...]  # axis charts this instruction is defined for
+    axis_types: tuple[str, ...]
+    operands: tuple[Operand, ...]
+    execution: str  # "transitional" | "level"
+    table: ExecutionTable
+    checks: tuple[Check, ...]
+    aborts: tuple[Check, ...]  # end a pending request with ER when they hold
+    request: Request | None
+    done_when: Expr | None  # None: done as soon as the request is accepted by the axis
+    status_bits: tuple[tuple[str, bool], ...]  # documented status-bit changes
+    description: str
+    provenance: Provenance
+    done_provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ErrorCode:
+    code: int
+    name: str
+    meaning: str
+    confidence: Confidence
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class ExtendedError:
+    instruction: str
+    err: int
+    exerr: int
+    name: str
+    meaning: str
+    confidence: Confidence
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class Spec:
+    """A whole loaded specification."""
+
+    charts: tuple[Chart, ...]
+    instructions: tuple[Instruction, ...]
+    tag_type: TagType
+    tables: tuple[ExecutionTable, ...]
+    errors: tuple[ErrorCode, ...]
+    extended_errors: tuple[ExtendedError, ...]
+    interpretations: tuple[Interpretation, ...]
+    files: tuple[str, ...] = field(default=())
+
+    def chart(self, chart_id: str) -> Chart:
+        for c in self.charts:
+            if c.id == chart_id:
+                return c
+        raise KeyError(chart_id)
+
+    def instruction(self, mnemonic: str) -> Instruction:
+        for i in self.instructions:
+            if i.id == mnemonic:
+                return i
+        raise KeyError(mnemonic)
+
+    def chart_for_axis_type(self, axis_type: str) -> Chart:
+        for c in self.charts:
+            if axis_type in c.axis_types:
+                return c
+        raise KeyError(axis_type)
+
+    def error(self, code: int) -> ErrorCode:
+        for e in self.errors:
+            if e.code == code:
+                return e
+        raise KeyError(code)
+
+    def interpretation(self, interp_id: str) -> Interpretation:
+        for i in self.interpretations:
+            if i.id == interp_id:
+                return i
+        raise KeyError(interp_id)

@@ -1,0 +1,211 @@
+"""Writes spec/schema/spec.schema.json (run once when the spec language changes)."""
+import json
+from pathlib import Path
+
+ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
+EXPR = {"type": "string", "minLength": 1}
+ACTIONS = {"type": "array", "items": EXPR}
+SOURCE = {"type": "string", "minLength": 1, "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
+INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$", "description": "Id of an interpretation in interpretations.yaml."}
+CONF = {"enum": ["C", "C3", "I", "U"]}
+SCALAR = {"type": ["boolean", "integer", "number", "string"]}
+
+variable = {
+    "type": "object", "additionalProperties": False,
+    "required": ["name", "type", "initial", "source"],
+    "properties": {
+        "name": ID, "type": {"enum": ["bool", "int", "enum", "real"]},
+        "domain": {"type": "array", "items": SCALAR, "minItems": 1},
+        "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+        "initial": SCALAR, "description": {"type": "string"},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+state = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "source"],
+    "properties": {
+        "id": ID, "name": {"type": "string"},
+        "kind": {"enum": ["atomic", "compound", "parallel", "history", "final"]},
+        "value": {"type": "integer"}, "initial": ID,
+        "history": {"enum": ["shallow", "deep"]},
+        "description": {"type": "string"},
+        "entry": ACTIONS, "exit": ACTIONS,
+        "states": {"type": "array", "items": {"$ref": "#/$defs/state"}},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+transition = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "from", "source"],
+    "properties": {
+        "id": ID, "from": ID, "to": ID, "event": ID, "guard": EXPR,
+        "actions": ACTIONS, "priority": {"type": "integer"},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+event = {
+    "type": "object", "additionalProperties": False,
+    "required": ["name", "kind", "source"],
+    "properties": {
+        "name": ID, "kind": {"enum": ["request", "environment", "clock"]},
+        "description": {"type": "string"}, "actions": ACTIONS,
+        "parameters": {"type": "array", "items": ID},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+chart = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "name", "kind", "state_attribute", "axis_types", "states", "transitions", "source"],
+    "properties": {
+        "id": ID, "name": {"type": "string"}, "kind": {"enum": ["axis"]},
+        "state_attribute": ID,
+        "axis_types": {"type": "array", "items": ID, "minItems": 1},
+        "description": {"type": "string"},
+        "variables": {"type": "array", "items": variable},
+        "events": {"type": "array", "items": event},
+        "states": {"type": "array", "items": {"$ref": "#/$defs/state"}, "minItems": 1},
+        "initial": ID,
+        "transitions": {"type": "array", "items": transition},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+operand = {
+    "type": "object", "additionalProperties": False,
+    "required": ["name", "type", "source"],
+    "properties": {
+        "name": ID, "type": {"enum": ["axis", "tag", "real", "int", "enum"]},
+        "domain": {"type": "array", "items": SCALAR, "minItems": 1},
+        "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
+        "text_values": {"type": "object", "additionalProperties": {"type": "integer"}},
+        "default": SCALAR, "description": {"type": "string"},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+check = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "fails_when", "err", "source"],
+    "properties": {
+        "id": ID, "fails_when": EXPR, "err": {"type": "integer", "minimum": 1},
+        "exerr": {"type": "integer", "minimum": 0},
+        "stage": {"enum": ["execute", "message"]},
+        "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
+    },
+}
+abort = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "when", "err", "source"],
+    "properties": {
+        "id": ID, "when": EXPR, "err": {"type": "integer", "minimum": 1},
+        "exerr": {"type": "integer", "minimum": 0},
+        "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
+    },
+}
+instruction = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "name", "charts", "axis_types", "operands", "execution", "execution_table", "checks", "done", "source"],
+    "properties": {
+        "id": ID, "name": {"type": "string"},
+        "charts": {"type": "array", "items": ID, "minItems": 1},
+        "axis_types": {"type": "array", "items": ID, "minItems": 1},
+        "description": {"type": "string"},
+        "operands": {"type": "array", "items": operand},
+        "execution": {"enum": ["transitional", "level"]},
+        "execution_table": ID,
+        "checks": {"type": "array", "items": check},
+        "aborts": {"type": "array", "items": abort},
+        "request": {
+            "type": "object", "additionalProperties": False, "required": ["event"],
+            "properties": {"event": ID, "actions": ACTIONS},
+        },
+        "done": {
+            "type": "object", "additionalProperties": False, "required": ["source"],
+            "properties": {"when": EXPR, "source": SOURCE, "interpretation": INTERP},
+        },
+        "status_bits": {"type": "object", "additionalProperties": {"type": "boolean"}},
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+block = {
+    "type": "object", "additionalProperties": False, "required": ["actions", "source"],
+    "properties": {"actions": ACTIONS, "source": SOURCE, "interpretation": INTERP},
+}
+table = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "rows", "on_execute", "on_error", "on_accept", "on_done", "source"],
+    "properties": {
+        "id": ID, "source": SOURCE, "interpretation": INTERP,
+        "rows": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False,
+            "required": ["condition", "actions", "source"],
+            "properties": {
+                "condition": {"enum": ["prescan", "rung_false", "rung_true", "postscan"]},
+                "guard": EXPR, "actions": ACTIONS, "execute": {"type": "boolean"},
+                "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
+            }}},
+        "on_execute": block, "on_error": block, "on_accept": block, "on_done": block,
+    },
+}
+tag_type = {
+    "type": "object", "additionalProperties": False,
+    "required": ["name", "members", "source"],
+    "properties": {
+        "name": ID, "source": SOURCE,
+        "members": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False,
+            "required": ["name", "type", "source"],
+            "properties": {
+                "name": ID, "type": {"enum": ["BOOL", "SINT", "INT", "DINT"]},
+                "bit": {"type": "integer", "minimum": 0, "maximum": 31},
+                "description": {"type": "string"}, "source": SOURCE,
+            }}},
+        "internal": {"type": "array", "items": variable},
+    },
+}
+interpretation = {
+    "type": "object", "additionalProperties": False,
+    "required": ["id", "title", "confidence", "text", "evidence"],
+    "properties": {
+        "id": INTERP, "title": {"type": "string"}, "confidence": CONF,
+        "text": {"type": "string", "minLength": 1},
+        "evidence": {"type": "array", "items": {"type": "string"}, "minItems": 1},
+    },
+}
+error = {
+    "type": "object", "additionalProperties": False,
+    "required": ["code", "name", "meaning", "confidence", "source"],
+    "properties": {
+        "code": {"type": "integer", "minimum": 0}, "name": ID, "meaning": {"type": "string"},
+        "confidence": CONF, "source": SOURCE, "interpretation": INTERP,
+    },
+}
+exerror = {
+    "type": "object", "additionalProperties": False,
+    "required": ["instruction", "err", "exerr", "name", "meaning", "confidence", "source"],
+    "properties": {
+        "instruction": ID, "err": {"type": "integer"}, "exerr": {"type": "integer"},
+        "name": ID, "meaning": {"type": "string"}, "confidence": CONF,
+        "source": SOURCE, "interpretation": INTERP,
+    },
+}
+schema = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "https://motionchart.invalid/schema/spec-1.json",
+    "title": "motionchart specification file, format 1",
+    "description": "One YAML file of a motionchart specification. A file holds one or more sections.",
+    "type": "object", "additionalProperties": False,
+    "required": ["format"], "minProperties": 2,
+    "properties": {
+        "format": {"const": "motionchart-spec/1"},
+        "chart": chart, "instruction": instruction,
+        "tag_type": tag_type,
+        "execution_tables": {"type": "array", "items": table},
+        "interpretations": {"type": "array", "items": interpretation},
+        "errors": {"type": "array", "items": error},
+        "extended_errors": {"type": "array", "items": exerror},
+    },
+    "$defs": {"state": state},
+}
+out = Path(__file__).resolve().parent.parent / "spec" / "schema" / "spec.schema.json"
+out.write_text(json.dumps(schema, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+print(out)

@@ -434,6 +434,18 @@ _CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[object, object], object], _
 
 _REFUSED_CMPOPS: Final[dict[type[ast.cmpop], str]] = {ast.Is: "is", ast.IsNot: "is not"}
 
+_CMP_NAME_CONST: Final[dict[type[ast.cmpop], Callable[[str, object], Fn]]] = {
+    ast.Eq: lambda k, c: lambda env: env[k] == c,
+    ast.NotEq: lambda k, c: lambda env: env[k] != c,
+    ast.Lt: lambda k, c: lambda env: env[k] < c,  # type: ignore[operator]
+    ast.LtE: lambda k, c: lambda env: env[k] <= c,  # type: ignore[operator]
+    ast.Gt: lambda k, c: lambda env: env[k] > c,  # type: ignore[operator]
+    ast.GtE: lambda k, c: lambda env: env[k] >= c,  # type: ignore[operator]
+    ast.In: lambda k, c: lambda env: env[k] in c,  # type: ignore[operator]
+    ast.NotIn: lambda k, c: lambda env: env[k] not in c,  # type: ignore[operator]
+}
+
+
 def _member_fn(lf: Fn, fs: frozenset[object], tup: tuple[object, ...], negate: bool) -> Fn:
     """``x in <constant display>`` as a frozenset probe (tuple scan for unhashable x)."""
     if negate:
@@ -483,13 +495,14 @@ class _Node:
     """A compiled sub-expression: its closure, its value when it is a constant, and
     (for a tuple/list/set display of constants) the constant members."""
 
-    __slots__ = ("fn", "const", "value", "members")
+    __slots__ = ("fn", "const", "value", "members", "key")
 
     def __init__(self, fn: Fn, const: bool = False, value: object = None) -> None:
         self.fn = fn
         self.const = const
         self.value = value
         self.members: tuple[object, ...] | None = None
+        self.key: str | None = None  # set for a plain variable read (lets parents fuse the lookup)
 
 
 def _constant(value: object) -> _Node:
@@ -552,7 +565,9 @@ class _Compiler:
     def read(self, node: ast.expr) -> _Node:
         key, off = self.path(node)
         self.names.setdefault(key, off)
-        return _Node(lambda env: env[key])
+        node = _Node(lambda env: env[key])
+        node.key = key
+        return node
 
     # -- dispatch
 
@@ -619,6 +634,9 @@ class _Compiler:
                 if len(fns) == 2:
                     a, b = fns
                     return _Node(lambda env: True if (a(env) and b(env)) else False)
+                if len(fns) == 3:
+                    a, b, c = fns
+                    return _Node(lambda env: True if (a(env) and b(env) and c(env)) else False)
             fs = tuple(fns)
 
             def and_fn(env: Env) -> object:
@@ -635,6 +653,9 @@ class _Compiler:
             if len(fns) == 2:
                 a, b = fns
                 return _Node(lambda env: True if (a(env) or b(env)) else False)
+            if len(fns) == 3:
+                a, b, c = fns
+                return _Node(lambda env: True if (a(env) or b(env) or c(env)) else False)
         fs = tuple(fns)
 
         def or_fn(env: Env) -> object:
@@ -651,8 +672,12 @@ class _Compiler:
         operand = self.expr(node.operand)
         f = operand.fn
         fn: Fn
+        k = operand.key
         if isinstance(node.op, ast.Not):
-            fn = lambda env: not f(env)  # noqa: E731
+            if k is not None:
+                fn = lambda env: not env[k]  # noqa: E731
+            else:
+                fn = lambda env: not f(env)  # noqa: E731
         elif isinstance(node.op, ast.USub):
             fn = lambda env: -f(env)  # type: ignore[operator]  # noqa: E731
         else:
@@ -699,6 +724,8 @@ class _Compiler:
             if left.const and right.const:
                 return _folded(ff(left.fn, right.fn))
             if right.const:
+                if left.key is not None:
+                    return _Node(_CMP_NAME_CONST[op_t](left.key, right.value))
                 return _Node(fc(left.fn, right.value))
             if left.const:
                 return _Node(cf(left.value, right.fn))
@@ -886,8 +913,16 @@ def check_names(expr: Expr | Assignment, known: Collection[str]) -> list[tuple[s
     """Names read (and, for an Assignment, written) that are not in ``known``.
 
     Each unknown name is listed once, with the 0-based character offset of its
-    first occurrence in ``expr.text``; the list is ordered by offset.
+    first occurrence in ``expr.text``; the list is ordered by offset.  (Offsets
+    come from re-parsing ``expr.text``, which is cached; an ``Expr`` built by hand
+    from text that does not parse reports its ``names`` at offset 0.)
     """
     kind = "assign" if isinstance(expr, Assignment) else "expr"
-    pairs = _name_offsets(expr.text, kind)
+    try:
+        pairs = _name_offsets(expr.text, kind)
+    except ExprError:  # built by hand from text that does not parse: no positions known
+        if isinstance(expr, Assignment):
+            pairs = ((expr.target, 0), *((n, 0) for n in sorted(expr.value.names)))
+        else:
+            pairs = tuple((n, 0) for n in sorted(expr.names))
     return sorted(((n, off) for n, off in pairs if n not in known), key=lambda p: (p[1], p[0]))

@@ -127,6 +127,7 @@ class Event:
     kind: str  # "request" (from an instruction) | "environment" | "clock"
     description: str
     parameters: tuple[str, ...]
+    actions: tuple[Assignment, ...]  # drive-model changes applied before the chart sees it
     provenance: Provenance
 
 

@@ -257,10 +257,11 @@ class _Builder:
         events = []
         for i, e in enumerate(event_nodes):
             p = (*base, "events", i)
-            self.actions(f, (*p, "actions"), e.get("actions"), known, var_names)
             events.append(ir.Event(
                 name=e["name"], kind=e["kind"], description=str(e.get("description", "")),
-                parameters=tuple(e.get("parameters", [])), provenance=self.prov(f, p, e),
+                parameters=tuple(e.get("parameters", [])),
+                actions=self.actions(f, (*p, "actions"), e.get("actions"), known, var_names),
+                provenance=self.prov(f, p, e),
             ))
         event_names = {e.name for e in events}
 

@@ -1,4 +1,6 @@
-"""Writes spec/schema/spec.schema.json (run once when the spec language changes)."""
+"""Writes the JSON Schemas in spec/schema/ (run when the spec or scenario language changes).
+
+A test regenerates them in memory and compares, so the files cannot go stale."""
 import json
 from pathlib import Path
 
@@ -206,6 +208,69 @@ schema = {
     },
     "$defs": {"state": state},
 }
-out = Path(__file__).resolve().parent.parent / "spec" / "schema" / "spec.schema.json"
-out.write_text(json.dumps(schema, indent=2, sort_keys=True) + "\n", encoding="utf-8")
-print(out)
+NAME_KEY = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
+OBS = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}
+scenario = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "https://motionchart.invalid/schema/scenario-1.json",
+    "title": "motionchart scenario, format 1",
+    "description": "A set-up and a list of steps of one or more PLC scans, each with expected observations.",
+    "type": "object", "additionalProperties": False,
+    "required": ["format", "name", "setup", "steps"],
+    "properties": {
+        "format": {"const": "motionchart-scenario/1"},
+        "name": {"type": "string", "minLength": 1},
+        "description": {"type": "string"},
+        "sources": {"type": "array", "items": {"type": "string"}},
+        "covers": {"type": "array", "items": {"type": "string"}},
+        "setup": {
+            "type": "object", "additionalProperties": False, "required": ["axes"],
+            "properties": {
+                "scan_ms": {"type": "integer", "minimum": 1},
+                "coarse_update_ms": {"type": "integer", "minimum": 1},
+                "axes": {"type": "object", "minProperties": 1, "propertyNames": NAME_KEY,
+                         "additionalProperties": {
+                             "type": "object", "additionalProperties": False, "required": ["type"],
+                             "properties": {
+                                 "type": {"type": "string"},
+                                 "state": {"type": "string"},
+                                 "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                             }}},
+                "program": {"type": "array", "items": {
+                    "type": "object", "additionalProperties": False,
+                    "required": ["tag", "instruction", "axis"],
+                    "properties": {
+                        "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
+                        "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                    }}},
+            },
+        },
+        "steps": {"type": "array", "minItems": 1, "items": {
+            "type": "object", "additionalProperties": False,
+            "properties": {
+                "name": {"type": "string"},
+                "prescan": {"type": "boolean"},
+                "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
+                "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
+                "operands": {"type": "object", "additionalProperties": {
+                    "type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}},
+                "events": {"type": "array", "items": {
+                    "type": "object", "additionalProperties": False, "required": ["axis", "event"],
+                    "properties": {"axis": NAME_KEY, "event": NAME_KEY}}},
+                "expect": {"type": "object", "additionalProperties": OBS},
+            }}},
+    },
+}
+
+
+def render(doc: dict) -> str:
+    return json.dumps(doc, indent=2, sort_keys=True) + "\n"
+
+
+SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario}
+
+if __name__ == "__main__":
+    out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"
+    for name, doc in SCHEMAS.items():
+        (out_dir / name).write_text(render(doc), encoding="utf-8")
+        print(out_dir / name)

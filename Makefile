@@ -1,0 +1,43 @@
+# Entry points: make check (install + validate the bundled spec + run the demo
+# scenarios), make test (install + every test). Both create .venv on their own.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.installed
+
+.PHONY: check test install deps-system lint clean
+
+$(STAMP): pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	@$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip >/dev/null 2>&1 || true
+	@$(BIN)/python -m pip install --quiet --disable-pip-version-check -e ".[test]" 2>&1 | grep -v "^WARNING: Location" || true
+	@$(BIN)/python -c "import statecharts, checker, motionchart_spec" 
+	@touch $(STAMP)
+
+install: $(STAMP) deps-system
+
+# Graphviz's `dot` renders diagrams: Debian's package when we are root, else the
+# graphviz-pure wheel (no root needed). Never fatal: text artefacts need no binary.
+deps-system:
+	@if ! command -v dot >/dev/null 2>&1 && ! test -x $(BIN)/graphviz-pure; then \
+	  if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing graphviz (apt-get)"; \
+	    (apt-get update -qq >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -qq graphviz >/dev/null 2>&1) \
+	      || $(BIN)/python -m pip install --quiet graphviz-pure 2>&1 | grep -v "^WARNING: Location" || true; \
+	  else \
+	    $(BIN)/python -m pip install --quiet graphviz-pure 2>&1 | grep -v "^WARNING: Location" || true; \
+	  fi; \
+	fi
+
+check: install
+	@$(BIN)/motionchart validate
+	@$(BIN)/motionchart simulate --quiet scenarios
+
+test: install
+	@$(BIN)/python -m pytest
+
+lint: install
+	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true
+
+clean:
+	rm -rf $(VENV) .pytest_cache .hypothesis build *.egg-info

@@ -1,0 +1,194 @@
+"""The ``motionchart`` command line (also ``python -m checker``).
+
+Pipeline position: the outermost layer; it calls the loader, the scenario runner and
+(later) the checker and renderers, and turns their results into text, JSON and exit
+codes.  Exit codes: 0 success, 1 a user file is wrong or an expectation failed,
+2 usage error.  A user error is printed as ``file:line:col: node-path: message`` lines,
+never as a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TextIO
+
+from statecharts.diagnostics import InputError
+from statecharts.loader import load_spec
+from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scenario_files
+
+EXIT_OK = 0
+EXIT_FAIL = 1
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.print_usage(sys.stderr)
+        print(f"{self.prog}: error: {message}", file=sys.stderr)
+        raise SystemExit(EXIT_USAGE)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="motionchart", description="Executable, checkable specification of Logix motion behaviour.")
+    parser.add_argument("--version", action="version", version="motionchart 0.1.0")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    v = sub.add_parser("validate", help="check spec files (default: the bundled spec)")
+    v.add_argument("paths", nargs="*", metavar="PATH", help="spec files or directories")
+    v.add_argument("--json", action="store_true", help="print one JSON object")
+
+    s = sub.add_parser("simulate", help="run scenarios on the engine and check their expectations")
+    s.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="scenario files or directories")
+    s.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--quiet", "-q", action="store_true", help="print only the summary line of each scenario")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    try:
+        if args.command == "validate":
+            return _validate(args, sys.stdout)
+        if args.command == "simulate":
+            return _simulate(args, sys.stdout)
+    except InputError as exc:
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        return EXIT_FAIL
+    except BrokenPipeError:
+        return EXIT_OK
+    return EXIT_USAGE
+
+
+def _missing(paths: Sequence[str]) -> list[str]:
+    return [p for p in paths if not Path(p).exists()]
+
+
+def _validate(args: argparse.Namespace, out: TextIO) -> int:
+    missing = _missing(args.paths)
+    if missing:
+        print(f"motionchart validate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
+        return EXIT_USAGE
+    try:
+        spec = load_spec(args.paths or None)
+    except InputError as exc:
+        if args.json:
+            json.dump({"valid": False, "errors": [str(d) for d in exc.diagnostics]}, out, indent=2, sort_keys=True)
+            out.write("\n")
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        print(f"{len(exc.diagnostics)} error(s)", file=sys.stderr)
+        return EXIT_FAIL
+    summary = {
+        "valid": True,
+        "files": len(spec.files),
+        "charts": [c.id for c in spec.charts],
+        "states": sum(len(c.states) for c in spec.charts),
+        "transitions": sum(len(c.transitions) for c in spec.charts),
+        "instructions": [i.id for i in spec.instructions],
+        "checks": sum(len(i.checks) for i in spec.instructions),
+        "error_codes": len(spec.errors),
+        "interpretations": len(spec.interpretations),
+    }
+    if args.json:
+        json.dump(summary, out, indent=2, sort_keys=True)
+        out.write("\n")
+    else:
+        out.write(
+            f"spec OK: {summary['files']} files, {len(spec.charts)} chart(s) "
+            f"({summary['states']} states, {summary['transitions']} transitions), "
+            f"{len(spec.instructions)} instructions ({summary['checks']} checks), "
+            f"{summary['error_codes']} error codes, {summary['interpretations']} interpretations\n"
+        )
+    return EXIT_OK
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+def _print_table(result: ScenarioResult, out: TextIO) -> None:
+    out.write(f"scenario: {result.scenario.name}  ({result.scenario.file})\n")
+    out.write(f"{'scan':>5}  {'step':<28}  changes\n")
+    for row in result.rows:
+        label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
+        changes = "  ".join(f"{o}.{f}={_fmt(a)}" for o, f, _b, a in row.changes) or "-"
+        cu = "" if row.record.coarse_update else " (no coarse update)"
+        out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
+
+
+def _result_json(result: ScenarioResult) -> dict[str, object]:
+    return {
+        "scenario": result.scenario.name,
+        "file": result.scenario.file,
+        "passed": result.passed,
+        "scans": [
+            {
+                "scan": r.record.index,
+                "step": r.step + 1,
+                "coarse_update": r.record.coarse_update,
+                "changes": {f"{o}.{f}": a for o, f, _b, a in r.changes},
+            }
+            for r in result.rows
+        ],
+        "failures": [
+            {"step": m.step + 1, "step_name": m.step_name, "scan": m.scan, "line": m.line, "object": m.target,
+             "field": m.field, "expected": m.expected, "actual": m.actual}
+            for m in result.mismatches
+        ],
+    }
+
+
+def _simulate(args: argparse.Namespace, out: TextIO) -> int:
+    missing = _missing(args.scenarios + (args.spec or []))
+    if missing:
+        print(f"motionchart simulate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
+        return EXIT_USAGE
+    spec = load_spec(args.spec)
+    files = scenario_files(args.scenarios)
+    if not files:
+        print("motionchart simulate: no scenario files found", file=sys.stderr)
+        return EXIT_USAGE
+    results: list[ScenarioResult] = []
+    input_errors: list[str] = []
+    for f in files:
+        try:
+            scenario = load_scenario(f, spec)
+        except InputError as exc:
+            input_errors.extend(str(d) for d in exc.diagnostics)
+            for d in exc.diagnostics:
+                print(d, file=sys.stderr)
+            continue
+        result = run_scenario(scenario, spec)
+        results.append(result)
+        if not args.json:
+            if not args.quiet:
+                _print_table(result, out)
+            verdict = "PASS" if result.passed else "FAIL"
+            out.write(f"{verdict} {scenario.name} ({len(result.rows)} scans)\n")
+            for m in result.mismatches:
+                out.write(f"  {scenario.file}:{m}\n")
+            if not args.quiet:
+                out.write("\n")
+    failed = [r for r in results if not r.passed]
+    if args.json:
+        json.dump({"results": [_result_json(r) for r in results], "input_errors": input_errors,
+                   "passed": len(results) - len(failed), "failed": len(failed)}, out, indent=2, sort_keys=True, default=str)
+        out.write("\n")
+    elif len(files) > 1 or input_errors:
+        out.write(f"scenarios: {len(results) - len(failed)} passed, {len(failed)} failed, "
+                  f"{len(files) - len(results)} invalid\n")
+    return EXIT_FAIL if failed or input_errors else EXIT_OK

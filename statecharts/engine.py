@@ -1,0 +1,233 @@
+"""The engine: IR charts -> python-statemachine ``StateChart`` classes.
+
+Pipeline position: IR -> **engine** -> scan semantics (:mod:`statecharts.scan`).
+python-statemachine's SCXML processing model (run-to-completion macrosteps, document
+order among enabled transitions, eventless transitions after every event, child
+transitions before their ancestors') is the reference semantics; this module only
+translates.  Guards and actions are the compiled closures of the IR, bound to one
+:class:`AxisInstance`'s variables through a per-chart model class whose methods
+python-statemachine resolves by name when the machine is created.
+
+Priorities: transitions of one source state and event are declared in ascending
+``priority`` and then spec order, so the library's document-order choice is our
+priority rule.
+
+Public API::
+
+    >>> from statecharts.loader import load_spec
+    >>> spec = load_spec()
+    >>> axis = AxisInstance(spec.chart("AxisNonCIP"), "Axis1")
+    >>> sorted(axis.active)
+    ['AxisReady', 'Operating']
+    >>> axis.send("servo_on"); axis.value
+    2
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+from statemachine import StateChart
+from statemachine.io import create_machine_class_from_definition
+
+from statecharts import ir
+from statecharts.expr import Assignment
+
+#: Values of the system parameters that axis-chart expressions may read.
+DEFAULT_PARAMETERS: dict[str, int] = {"coarse_update_ms": 10, "scan_ms": 10}
+
+
+class ChartModel:
+    """The model object python-statemachine calls back into; holds one axis's variables."""
+
+    env: dict[str, object]
+
+    def __init__(self, env: dict[str, object]) -> None:
+        self.env = env
+
+
+def _guard_method(guard: Callable[[Mapping[str, object]], object]) -> Callable[..., bool]:
+    def method(self: ChartModel, *args: object, **kwargs: object) -> bool:
+        return bool(guard(self.env))
+
+    return method
+
+
+def _action_method(actions: tuple[Assignment, ...]) -> Callable[..., None]:
+    def method(self: ChartModel, *args: object, **kwargs: object) -> None:
+        for a in actions:
+            a.apply(self.env)
+
+    return method
+
+
+def _ordered(transitions: Iterable[ir.Transition]) -> list[ir.Transition]:
+    indexed = list(enumerate(transitions))
+    return [t for _, t in sorted(indexed, key=lambda it: (it[1].priority, it[0]))]
+
+
+@functools.lru_cache(maxsize=None)
+def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
+    """The python-statemachine class for ``chart`` and the model class its names resolve on.
+
+    This is also the documented way to embed a chart in one's own code: instantiate
+    ``Model(env)`` with a dict of variables, then ``Machine(model=...)``.
+    """
+    model_attrs: dict[str, Any] = {}
+    by_parent: dict[str | None, list[ir.State]] = {}
+    for s in chart.states:
+        by_parent.setdefault(s.parent, []).append(s)
+
+    def define(state: ir.State) -> dict[str, Any]:
+        d: dict[str, Any] = {"name": state.name, "value": state.id}
+        if state.entry:
+            model_attrs[f"enter__{state.id}"] = _action_method(state.entry)
+            d["enter"] = [f"enter__{state.id}"]
+        if state.exit:
+            model_attrs[f"exit__{state.id}"] = _action_method(state.exit)
+            d["exit"] = [f"exit__{state.id}"]
+        if state.kind is ir.StateKind.FINAL:
+            d["final"] = True
+        if state.kind is ir.StateKind.PARALLEL:
+            d["parallel"] = True
+        children = [c for c in by_parent.get(state.id, []) if c.kind is not ir.StateKind.HISTORY]
+        history = [c for c in by_parent.get(state.id, []) if c.kind is ir.StateKind.HISTORY]
+        if children:
+            d["states"] = {c.id: define(c) for c in children}
+            if state.kind is ir.StateKind.COMPOUND:
+                d["states"][state.initial]["initial"] = True
+        if history:
+            d["history"] = {h.id: {"type": h.history_type or "shallow"} for h in history}
+        on: dict[str, list[dict[str, Any]]] = {}
+        eventless: list[dict[str, Any]] = []
+        for t in _ordered(x for x in chart.transitions if x.source == state.id):
+            td: dict[str, Any] = {"target": t.target}
+            if t.guard is not None:
+                model_attrs[f"guard__{t.id}"] = _guard_method(t.guard)
+                td["cond"] = [f"guard__{t.id}"]
+            if t.actions:
+                model_attrs[f"action__{t.id}"] = _action_method(t.actions)
+                td["on"] = [f"action__{t.id}"]
+            if t.event is None:
+                eventless.append(td)
+            else:
+                on.setdefault(t.event, []).append(td)
+        if on:
+            d["on"] = on
+        if eventless:
+            d["transitions"] = eventless
+        return d
+
+    states = {s.id: define(s) for s in by_parent.get(None, []) if s.kind is not ir.StateKind.HISTORY}
+    states[chart.root_initial]["initial"] = True
+    model_cls = type(f"{chart.id}Model", (ChartModel,), model_attrs)
+    machine = create_machine_class_from_definition(
+        chart.id,
+        states=states,
+        validate_trap_states=False,
+        validate_disconnected_states=False,
+        validate_final_reachability=False,
+    )
+    machine.allow_event_without_transition = True
+    return machine, model_cls
+
+
+def initial_env(chart: ir.Chart, parameters: Mapping[str, int] | None = None) -> dict[str, object]:
+    env: dict[str, object] = {v.name: v.initial for v in chart.variables}
+    env.update(DEFAULT_PARAMETERS)
+    if parameters:
+        env.update(parameters)
+    return env
+
+
+class AxisInstance:
+    """One axis: a running python-statemachine chart plus its variables."""
+
+    def __init__(
+        self,
+        chart: ir.Chart,
+        name: str,
+        *,
+        state: str | None = None,
+        variables: Mapping[str, object] | None = None,
+        parameters: Mapping[str, int] | None = None,
+    ) -> None:
+        self.chart = chart
+        self.name = name
+        machine_cls, model_cls = machine_class(chart)
+        self.env = initial_env(chart, parameters)
+        if variables:
+            self.env.update(variables)
+        preset = dict(self.env)
+        self.model = model_cls(self.env)
+        self.machine = machine_cls(model=self.model)
+        if state is not None and state not in self.active:
+            self._force(state, preset)
+        if variables:
+            # explicit set-up values win over entry actions of the initial state
+            self.env.update(variables)
+        self._leaf_by_id = {s.id: s for s in chart.states}
+
+    def _force(self, state: str, preset: Mapping[str, object]) -> None:
+        """Start in ``state``: its configuration is entered and its entry actions run."""
+        self.env.clear()
+        self.env.update(preset)
+        chain = list(reversed(self.chart.ancestors(state)))
+        target = self.chart.state(state)
+        while target.kind in (ir.StateKind.COMPOUND, ir.StateKind.PARALLEL):
+            if target.kind is ir.StateKind.PARALLEL:
+                raise ValueError(f"cannot start in parallel state {state!r}; name a leaf state")
+            assert target.initial is not None
+            target = self.chart.state(target.initial)
+            chain.append(target.id)
+        self.machine.current_state_value = set(chain) if len(chain) > 1 else chain[0]
+        for sid in chain:
+            for a in self.chart.state(sid).entry:
+                a.apply(self.env)
+
+    @property
+    def active(self) -> frozenset[str]:
+        return frozenset(str(v) for v in self.machine.configuration_values)
+
+    @property
+    def leaf(self) -> ir.State:
+        leaves = [s for s in self.chart.leaf_states() if s.id in self.active]
+        return leaves[0]
+
+    @property
+    def value(self) -> int | None:
+        return self.leaf.value
+
+    def send(self, event: str) -> None:
+        self.machine.send(event)
+
+    def apply_event_actions(self, event: str) -> None:
+        for a in chart_event_actions(self.chart).get(event, ()):
+            a.apply(self.env)
+
+    def observe(self) -> dict[str, object]:
+        """The axis as the scan table and scenarios see it."""
+        out: dict[str, object] = {
+            "state": self.leaf.id,
+            self.chart.state_attribute: self.value,
+        }
+        for v in self.chart.variables:
+            out[v.name] = self.env[v.name]
+        return out
+
+    def expression_env(self) -> dict[str, object]:
+        """Variables as instructions see them: ``axis.X`` keys plus ``axis.active``."""
+        env: dict[str, object] = {f"axis.{k}": v for k, v in self.env.items()}
+        env["axis.active"] = self.active
+        env["axis.state"] = self.leaf.id
+        env["axis.chart"] = self.chart.id
+        env[f"axis.{self.chart.state_attribute}"] = self.value
+        return env
+
+
+@functools.lru_cache(maxsize=None)
+def chart_event_actions(chart: ir.Chart) -> dict[str, tuple[Assignment, ...]]:
+    """Environment events change drive-model variables before the chart sees them."""
+    return {e.name: e.actions for e in chart.events}

@@ -1,0 +1,236 @@
+"""PLC scan semantics: the one module that says when what happens.
+
+Pipeline position: engine (python-statemachine charts) -> **scan** -> scenarios, CLI.
+The model checker (a later stage) must follow these same rules; they are written out
+in ``docs/semantics.md``.  In short, one call of :meth:`System.scan` is one PLC scan:
+
+1. Program: every instruction of the program is scanned in program order with its
+   current rung-condition-in.  The row of its execution table for that condition runs
+   (``rung_true`` / ``rung_false``; ``prescan`` on a prescan pass).  A row marked
+   ``execute`` runs the instruction: ``on_execute``, then the checks of stage
+   ``execute`` in spec order; the first that fails sets ERR / EXERR and ``on_error``;
+   if none fails, ``on_accept`` and the request is queued for its axis.
+2. Coarse update (every ``coarse_update_ms / scan_ms`` scans, the first scan included):
+   for each axis in set-up order,
+   a. queued requests in program order: every check of the instruction is evaluated
+      again, in order (stage ``message`` included); the first failing one ends the
+      instruction with ER; otherwise the request's actions are applied and its event
+      is sent to the axis chart;
+   b. the drive model advances: the chart receives ``tick``;
+   c. environment events for the axis are applied (their actions, then the event);
+   then every pending instruction whose request was delivered is finished: DN when its
+   completion condition holds, else ER when one of its aborts holds, else it stays
+   pending.  Environment events given on a scan without a coarse update wait for the
+   next one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+from statecharts import ir
+from statecharts.engine import AxisInstance
+
+#: MOTION_INSTRUCTION members reported in observations, in display order.
+TAG_FIELDS = ("EN", "DN", "ER", "PC", "IP", "ERR", "EXERR", "FLAGS")
+
+
+@dataclass(frozen=True, slots=True)
+class EnvironmentEvent:
+    axis: str
+    event: str
+
+
+@dataclass(frozen=True, slots=True)
+class ScanInputs:
+    """What the outside world sets for one scan."""
+
+    rungs: Mapping[str, bool] = field(default_factory=dict)
+    operands: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
+    events: tuple[EnvironmentEvent, ...] = ()
+    prescan: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class ScanRecord:
+    """What one scan did and what could be observed after it."""
+
+    index: int
+    coarse_update: bool
+    observations: Mapping[str, Mapping[str, object]]
+
+
+class TagInstance:
+    """One MOTION_INSTRUCTION tag bound to one instruction call in the program."""
+
+    def __init__(self, name: str, instruction: ir.Instruction, tag_type: ir.TagType, axis: str) -> None:
+        self.name = name
+        self.instruction = instruction
+        self.tag_type = tag_type
+        self.axis = axis
+        self.values: dict[str, object] = {}
+        for m in tag_type.members:
+            self.values[m.name] = False if m.type == "BOOL" else 0
+        for v in tag_type.internal:
+            self.values[v.name] = v.initial
+        self.operands: dict[str, object] = {
+            o.name: o.default for o in instruction.operands if o.type not in ("axis", "tag")
+        }
+        self.rung = False
+
+    def run(self, actions: Sequence[object]) -> None:
+        for a in actions:
+            a.apply(self.values)  # type: ignore[attr-defined]
+
+    @property
+    def flags(self) -> int:
+        word = 0
+        for m in self.tag_type.members:
+            if m.bit is not None and self.values[m.name]:
+                word |= 1 << m.bit
+        # FLAGS is a DINT: bit 31 makes it negative
+        return word - (1 << 32) if word & (1 << 31) else word
+
+    def observe(self) -> dict[str, object]:
+        out = {m.name: self.values[m.name] for m in self.tag_type.members}
+        out["FLAGS"] = self.flags
+        return out
+
+
+class System:
+    """Axes, a program of instruction tags, and the scan clock."""
+
+    def __init__(
+        self,
+        spec: ir.Spec,
+        axes: Sequence[AxisInstance],
+        program: Sequence[tuple[str, str, str]],
+        *,
+        scan_ms: int = 10,
+        coarse_update_ms: int = 10,
+    ) -> None:
+        if scan_ms <= 0 or coarse_update_ms <= 0:
+            raise ValueError("scan_ms and coarse_update_ms must be positive")
+        self.spec = spec
+        self.axes = {a.name: a for a in axes}
+        self.tags: dict[str, TagInstance] = {}
+        for tag, mnemonic, axis in program:
+            self.tags[tag] = TagInstance(tag, spec.instruction(mnemonic), spec.tag_type, axis)
+        self.scan_ms = scan_ms
+        self.coarse_update_ms = coarse_update_ms
+        self.scans_per_update = max(1, coarse_update_ms // scan_ms)
+        self.index = 0
+        self.queue: list[str] = []
+        self.held_events: list[EnvironmentEvent] = []
+
+    # -- the scan ---------------------------------------------------------------
+
+    def scan(self, inputs: ScanInputs) -> ScanRecord:
+        for name, rung in inputs.rungs.items():
+            self.tags[name].rung = rung
+        for name, ops in inputs.operands.items():
+            self.tags[name].operands.update(ops)
+        self.held_events.extend(inputs.events)
+        coarse = False
+        if inputs.prescan:
+            for tag in self.tags.values():
+                self._row(tag, "prescan")
+        else:
+            for tag in self.tags.values():
+                self._row(tag, "rung_true" if tag.rung else "rung_false")
+            coarse = self.index % self.scans_per_update == 0
+            if coarse:
+                self._coarse_update()
+        record = ScanRecord(self.index, coarse, self.observe())
+        self.index += 1
+        return record
+
+    def _row(self, tag: TagInstance, condition: str) -> None:
+        row = tag.instruction.table.row(condition)
+        if row is None:
+            return
+        if row.guard is not None and not row.guard(tag.values):
+            return
+        tag.run(row.actions)
+        if row.execute:
+            self._execute(tag)
+
+    def _check_env(self, tag: TagInstance) -> dict[str, object]:
+        env = self.axes[tag.axis].expression_env()
+        for k, v in tag.operands.items():
+            env[f"op.{k}"] = v
+        return env
+
+    def _first_failure(self, tag: TagInstance, stages: tuple[ir.Stage, ...]) -> ir.Check | None:
+        env = self._check_env(tag)
+        for check in tag.instruction.checks:
+            if check.stage in stages and check.fails_when(env):
+                return check
+        return None
+
+    def _fail(self, tag: TagInstance, check: ir.Check) -> None:
+        tag.values["ERR"] = check.err
+        tag.values["EXERR"] = check.exerr
+        tag.run(tag.instruction.table.on_error)
+
+    def _execute(self, tag: TagInstance) -> None:
+        table = tag.instruction.table
+        tag.run(table.on_execute)
+        failed = self._first_failure(tag, (ir.Stage.EXECUTE,))
+        if failed is not None:
+            self._fail(tag, failed)
+            return
+        tag.run(table.on_accept)
+        if tag.name in self.queue:
+            self.queue.remove(tag.name)
+        self.queue.append(tag.name)
+
+    def _coarse_update(self) -> None:
+        delivered: list[TagInstance] = []
+        events, self.held_events = self.held_events, []
+        for axis in self.axes.values():
+            for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
+                self.queue.remove(name)
+                tag = self.tags[name]
+                if not tag.values.get("pending"):
+                    continue
+                failed = self._first_failure(tag, (ir.Stage.EXECUTE, ir.Stage.MESSAGE))
+                if failed is not None:
+                    self._fail(tag, failed)
+                    continue
+                request = tag.instruction.request
+                if request is not None:
+                    env = self._check_env(tag)
+                    for a in request.actions:
+                        axis.env[a.target.removeprefix("axis.")] = a.value(env)
+                    axis.send(request.event)
+                delivered.append(tag)
+            axis.send("tick")
+            for ev in events:
+                if ev.axis == axis.name:
+                    axis.apply_event_actions(ev.event)
+                    axis.send(ev.event)
+        for tag in self.tags.values():
+            if not tag.values.get("pending") or tag.name in self.queue:
+                continue
+            ins = tag.instruction
+            env = self._check_env(tag)
+            if ins.done_when is None or ins.done_when(env):
+                tag.run(ins.table.on_done)
+                continue
+            for ab in ins.aborts:
+                if ab.fails_when(env):
+                    self._fail(tag, ab)
+                    break
+
+    # -- observation --------------------------------------------------------------
+
+    def observe(self) -> Mapping[str, Mapping[str, object]]:
+        out: dict[str, Mapping[str, object]] = {}
+        for name, tag in self.tags.items():
+            out[name] = MappingProxyType(tag.observe())
+        for name, axis in self.axes.items():
+            out[name] = MappingProxyType(axis.observe())
+        return MappingProxyType(out)

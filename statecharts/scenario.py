@@ -1,0 +1,323 @@
+"""Scenarios: load, validate and run a set-up plus scans with expected observations.
+
+Pipeline position: IR + scan semantics -> **scenario runner** -> CLI ``simulate`` and the
+tests.  A scenario file (YAML or JSON, ``format: motionchart-scenario/1``, schema in
+``spec/schema/scenario.schema.json``) is checked against the schema and then against
+the spec (known axis types, states, variables, instructions, operands and observation
+fields); every problem is reported with its file, line and node path, all at once.
+
+Running it gives a :class:`ScenarioResult`: the record of every scan and the list of
+expectation failures, each naming the step, the object and the field.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from statecharts import ir
+from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
+from statecharts.engine import AxisInstance
+from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics
+from statecharts.scan import TAG_FIELDS, EnvironmentEvent, ScanInputs, ScanRecord, System
+
+SCENARIO_FORMAT = "motionchart-scenario/1"
+
+
+@dataclass(frozen=True, slots=True)
+class AxisSetup:
+    name: str
+    axis_type: str
+    chart: str
+    state: str | None
+    variables: tuple[tuple[str, object], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ProgramEntry:
+    tag: str
+    instruction: str
+    axis: str
+    operands: tuple[tuple[str, object], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    index: int
+    name: str
+    scans: int
+    inputs: ScanInputs
+    expect: tuple[tuple[str, str, object], ...]  # (object, field, value)
+    line: int
+
+
+@dataclass(frozen=True, slots=True)
+class Scenario:
+    file: str
+    name: str
+    description: str
+    sources: tuple[str, ...]
+    covers: tuple[str, ...]
+    scan_ms: int
+    coarse_update_ms: int
+    axes: tuple[AxisSetup, ...]
+    program: tuple[ProgramEntry, ...]
+    steps: tuple[Step, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Mismatch:
+    step: int
+    step_name: str
+    scan: int
+    target: str
+    field: str
+    expected: object
+    actual: object
+    line: int
+
+    def __str__(self) -> str:
+        label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
+        return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
+                f"expected {self.expected!r}, got {self.actual!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class ScanRow:
+    """One scan of a run, with the step it belongs to and what changed."""
+
+    step: int
+    step_name: str
+    record: ScanRecord
+    changes: tuple[tuple[str, str, object, object], ...]  # (object, field, before, after)
+
+
+@dataclass(frozen=True, slots=True)
+class ScenarioResult:
+    scenario: Scenario
+    rows: tuple[ScanRow, ...]
+    mismatches: tuple[Mismatch, ...]
+
+    @property
+    def passed(self) -> bool:
+        return not self.mismatches
+
+
+def scenario_schema() -> dict[str, Any]:
+    schema: dict[str, Any] = json.loads(
+        (bundled_spec_dir() / "schema" / "scenario.schema.json").read_text(encoding="utf-8")
+    )
+    return schema
+
+
+def _read(path: Path, errors: list[Diagnostic]) -> Any:
+    if path.suffix == ".json":
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            errors.append(Diagnostic(str(path), 1, 1, "", f"cannot read scenario: {exc}"))
+            return None
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError as exc:
+            errors.append(Diagnostic(str(path), exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
+            return None
+    return read_yaml(path, errors, what="scenario")
+
+
+def _coerce_operand(operand: ir.Operand, value: object) -> object:
+    if isinstance(value, str) and operand.text_values:
+        names = {k.lower(): v for k, v in operand.text_values}
+        if value.lower() in names:
+            return names[value.lower()]
+    return value
+
+
+def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
+    """Read and check a scenario against the spec; raise ScenarioError with every problem."""
+    path = Path(path)
+    name = str(path)
+    errors: list[Diagnostic] = []
+    tree = _read(path, errors)
+    if tree is None:
+        if not errors:
+            errors.append(Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
+        raise ScenarioError(errors)
+    problems = schema_diagnostics(name, tree, scenario_schema(), "a scenario")
+    if problems:
+        raise ScenarioError(problems)
+    doc = _plain(tree)
+
+    def err(parts: tuple[Any, ...], message: str) -> None:
+        line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
+        errors.append(Diagnostic(name, line, col, node_path(parts), message))
+
+    setup = doc["setup"]
+    axis_types = sorted({t for c in spec.charts for t in c.axis_types})
+    axes: list[AxisSetup] = []
+    charts: dict[str, ir.Chart] = {}
+    for axis_name, a in setup["axes"].items():
+        p = ("setup", "axes", axis_name)
+        try:
+            chart = spec.chart_for_axis_type(a["type"])
+        except KeyError:
+            err((*p, "type"), f"unknown axis type {a['type']!r}; expected one of: {', '.join(axis_types)}")
+            continue
+        charts[axis_name] = chart
+        state = a.get("state")
+        if state is not None and state not in {s.id for s in chart.states}:
+            err((*p, "state"), f"chart {chart.id} has no state {state!r}; states: {', '.join(s.id for s in chart.states)}")
+        variables = dict(a.get("variables", {}))
+        for vname, value in variables.items():
+            try:
+                var = chart.variable(vname)
+            except KeyError:
+                err((*p, "variables", vname), f"chart {chart.id} has no variable {vname!r}")
+                continue
+            if var.domain is not None and value not in var.domain:
+                err((*p, "variables", vname), f"{value!r} is not in the domain of {vname}: {list(var.domain)!r}")
+        if "AxisType" in {v.name for v in chart.variables}:
+            variables.setdefault("AxisType", a["type"])
+        axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
+
+    program: list[ProgramEntry] = []
+    tag_ins: dict[str, ir.Instruction] = {}
+    for i, entry in enumerate(setup.get("program", [])):
+        p = ("setup", "program", i)
+        if entry["tag"] in tag_ins:
+            err((*p, "tag"), f"tag {entry['tag']!r} is used twice; each instruction needs its own MOTION_INSTRUCTION tag")
+        try:
+            ins = spec.instruction(entry["instruction"])
+        except KeyError:
+            err((*p, "instruction"), f"unknown instruction {entry['instruction']!r}; expected one of: {', '.join(i.id for i in spec.instructions)}")
+            continue
+        if entry["axis"] not in setup["axes"]:
+            err((*p, "axis"), f"unknown axis {entry['axis']!r}; axes: {', '.join(setup['axes'])}")
+        tag_ins[entry["tag"]] = ins
+        ops = _operands(ins, entry.get("operands", {}), (*p, "operands"), err)
+        program.append(ProgramEntry(entry["tag"], ins.id, entry["axis"], tuple(sorted(ops.items()))))
+
+    steps: list[Step] = []
+    for i, s in enumerate(doc["steps"]):
+        p = ("steps", i)
+        for tag in s.get("rungs", {}):
+            if tag not in tag_ins:
+                err((*p, "rungs", tag), f"unknown tag {tag!r}; program tags: {', '.join(tag_ins) or '(none)'}")
+        operands: dict[str, Mapping[str, object]] = {}
+        for tag, ops in s.get("operands", {}).items():
+            if tag not in tag_ins:
+                err((*p, "operands", tag), f"unknown tag {tag!r}")
+                continue
+            operands[tag] = _operands(tag_ins[tag], ops, (*p, "operands", tag), err)
+        events = []
+        for j, e in enumerate(s.get("events", [])):
+            chart = charts.get(e["axis"])
+            if chart is None:
+                err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}")
+                continue
+            env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
+            if e["event"] not in env_events:
+                err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
+            events.append(EnvironmentEvent(e["axis"], e["event"]))
+        expect: list[tuple[str, str, object]] = []
+        for target, fields in s.get("expect", {}).items():
+            if target in tag_ins:
+                allowed = list(TAG_FIELDS)
+            elif target in charts:
+                c = charts[target]
+                allowed = ["state", c.state_attribute] + [v.name for v in c.variables]
+            else:
+                err((*p, "expect", target), f"unknown tag or axis {target!r}")
+                continue
+            for fname, value in fields.items():
+                if fname not in allowed:
+                    err((*p, "expect", target, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
+                expect.append((target, fname, value))
+        line, _ = locate(tree, p)
+        steps.append(Step(
+            index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)),
+            inputs=ScanInputs(rungs=dict(s.get("rungs", {})), operands=operands, events=tuple(events),
+                              prescan=bool(s.get("prescan", False))),
+            expect=tuple(expect), line=line,
+        ))
+    scan_ms = int(setup.get("scan_ms", 10))
+    cu_ms = int(setup.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("setup", "coarse_update_ms"), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    if errors:
+        raise ScenarioError(errors)
+    return Scenario(
+        file=name, name=doc["name"], description=str(doc.get("description", "")),
+        sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])),
+        scan_ms=scan_ms, coarse_update_ms=cu_ms, axes=tuple(axes), program=tuple(program), steps=tuple(steps),
+    )
+
+
+def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any, ...], err: Any) -> dict[str, object]:
+    known = {o.name: o for o in ins.operands if o.type not in ("axis", "tag")}
+    out: dict[str, object] = {}
+    for oname, value in given.items():
+        if oname not in known:
+            err((*parts, oname), f"{ins.id} has no operand {oname!r}; operands: {', '.join(known) or '(none)'}")
+            continue
+        out[oname] = _coerce_operand(known[oname], value)
+    return out
+
+
+def build_system(scenario: Scenario, spec: ir.Spec) -> System:
+    params = {"scan_ms": scenario.scan_ms, "coarse_update_ms": scenario.coarse_update_ms}
+    axes = [
+        AxisInstance(spec.chart(a.chart), a.name, state=a.state, variables=dict(a.variables), parameters=params)
+        for a in scenario.axes
+    ]
+    system = System(spec, axes, [(p.tag, p.instruction, p.axis) for p in scenario.program],
+                    scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms)
+    for p in scenario.program:
+        system.tags[p.tag].operands.update(dict(p.operands))
+    return system
+
+
+def _same(expected: object, actual: object) -> bool:
+    if isinstance(expected, bool) or isinstance(actual, bool):
+        return expected is actual or (isinstance(expected, bool) and isinstance(actual, bool) and expected == actual)
+    if isinstance(expected, (int, float)) and isinstance(actual, (int, float)):
+        return abs(float(expected) - float(actual)) <= 1e-9 * max(1.0, abs(float(expected)))
+    return expected == actual
+
+
+def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
+    system = build_system(scenario, spec)
+    before = system.observe()
+    rows: list[ScanRow] = []
+    mismatches: list[Mismatch] = []
+    for step in scenario.steps:
+        for k in range(step.scans):
+            inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
+            record = system.scan(inputs)
+            changes = tuple(
+                (obj, fld, before.get(obj, {}).get(fld), val)
+                for obj, fields in record.observations.items()
+                for fld, val in fields.items()
+                if before.get(obj, {}).get(fld) != val or (obj not in before)
+            )
+            rows.append(ScanRow(step.index, step.name, record, changes))
+            before = record.observations
+        for target, fld, expected in step.expect:
+            actual = before[target][fld]
+            if not _same(expected, actual):
+                mismatches.append(Mismatch(step.index, step.name, rows[-1].record.index, target, fld,
+                                           expected, actual, step.line))
+    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
+
+
+def scenario_files(paths: Sequence[Path | str]) -> list[Path]:
+    out: list[Path] = []
+    for p in map(Path, paths):
+        if p.is_dir():
+            out.extend(sorted(x for x in p.rglob("*") if x.suffix in (".yaml", ".yml", ".json") and x.is_file()))
+        else:
+            out.append(p)
+    return out

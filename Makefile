@@ -5,13 +5,14 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test install deps-system lint clean
+.PHONY: check test deep install deps-system lint clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	@$(BIN)/python -m pip install --quiet --disable-pip-version-check --upgrade pip >/dev/null 2>&1 || true
-	@$(BIN)/python -m pip install --quiet --disable-pip-version-check -e ".[test]" 2>&1 | grep -v "^WARNING: Location" || true
-	@$(BIN)/python -c "import statecharts, checker, motionchart_spec" 
+	@echo "installing motionchart and its dependencies into $(VENV) (log: $(VENV)/install.log)"
+	@$(BIN)/python -m pip install --disable-pip-version-check -e ".[test]" >$(VENV)/install.log 2>&1 \
+	  || { tail -n 30 $(VENV)/install.log; echo "pip install failed; full log in $(VENV)/install.log"; exit 1; }
+	@$(BIN)/python -c "import statecharts, checker, motionchart_spec"
 	@touch $(STAMP)
 
 install: $(STAMP) deps-system
@@ -35,6 +36,10 @@ check: install
 
 test: install
 	@$(BIN)/python -m pytest
+
+# Longer property-based runs than CI affords.
+deep: install
+	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 
 lint: install
 	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true

@@ -32,6 +32,7 @@ from types import MappingProxyType
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
+from statecharts.expr import Assignment
 
 #: MOTION_INSTRUCTION members reported in observations, in display order.
 TAG_FIELDS = ("EN", "DN", "ER", "PC", "IP", "ERR", "EXERR", "FLAGS")
@@ -80,9 +81,9 @@ class TagInstance:
         }
         self.rung = False
 
-    def run(self, actions: Sequence[object]) -> None:
+    def run(self, actions: Sequence[Assignment]) -> None:
         for a in actions:
-            a.apply(self.values)  # type: ignore[attr-defined]
+            a.apply(self.values)
 
     @property
     def flags(self) -> int:
@@ -188,7 +189,6 @@ class System:
         self.queue.append(tag.name)
 
     def _coarse_update(self) -> None:
-        delivered: list[TagInstance] = []
         events, self.held_events = self.held_events, []
         for axis in self.axes.values():
             for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
@@ -206,7 +206,6 @@ class System:
                     for a in request.actions:
                         axis.env[a.target.removeprefix("axis.")] = a.value(env)
                     axis.send(request.event)
-                delivered.append(tag)
             axis.send("tick")
             for ev in events:
                 if ev.axis == axis.name:

@@ -203,6 +203,20 @@ class AxisInstance:
     def send(self, event: str) -> None:
         self.machine.send(event)
 
+    def snapshot(self) -> tuple[frozenset[str], tuple[object, ...]]:
+        """(active configuration, chart variable values in declaration order)."""
+        return self.active, tuple(self.env[v.name] for v in self.chart.variables)
+
+    def restore(self, snap: tuple[frozenset[str], tuple[object, ...]]) -> None:
+        """Put the machine in a configuration taken by :meth:`snapshot` (no actions run).
+
+        History memories are not part of the snapshot: restoring is exact for charts
+        without history states (the model checker's IR interpreter keeps them)."""
+        active, values = snap
+        for v, value in zip(self.chart.variables, values):
+            self.env[v.name] = value
+        self.machine.current_state_value = set(active) if len(active) > 1 else next(iter(active))
+
     def apply_event_actions(self, event: str) -> None:
         for a in chart_event_actions(self.chart).get(event, ()):
             a.apply(self.env)

@@ -14,14 +14,25 @@ in ``docs/semantics.md``.  In short, one call of :meth:`System.scan` is one PLC 
    for each axis in set-up order,
    a. queued requests in program order: every check of the instruction is evaluated
       again, in order (stage ``message`` included); the first failing one ends the
-      instruction with ER; otherwise the request's actions are applied and its event
-      is sent to the axis chart;
+      instruction with ER; otherwise the request's actions are applied, its event is
+      sent to the axis chart, and the instruction is finished at once (DN when its
+      completion condition holds, else ER when an abort holds, else it stays
+      pending) before the next request is processed;
    b. the drive model advances: the chart receives ``tick``;
    c. environment events for the axis are applied (their actions, then the event);
-   then every pending instruction whose request was delivered is finished: DN when its
-   completion condition holds, else ER when one of its aborts holds, else it stays
-   pending.  Environment events given on a scan without a coarse update wait for the
+   then every instruction still pending whose request was delivered is finished the
+   same way (this is how a delayed completion such as MDO's arrives).  Environment events given on a scan without a coarse update wait for the
    next one.
+
+The same :class:`System` runs every axis back-end that offers the axis interface of
+:class:`~statecharts.engine.AxisInstance` (``name``, ``env``, ``send``,
+``apply_event_actions``, ``expression_env``, ``observe``, ``snapshot``, ``restore``):
+the python-statemachine engine (the reference) and the model checker's IR interpreter
+(:mod:`checker.compile`).  The checker restores a state with :meth:`System.restore`,
+runs one :meth:`System.advance` (a scan without the observation record) and takes the
+successor with :meth:`System.snapshot`, so there is exactly one implementation of these
+rules.  With :attr:`System.trace` set to a list, a scan appends explicit
+:class:`Executed`, :class:`Errored` and :class:`Done` records to it.
 """
 
 from __future__ import annotations
@@ -42,6 +53,31 @@ TAG_FIELDS = ("EN", "DN", "ER", "PC", "IP", "ERR", "EXERR", "FLAGS")
 class EnvironmentEvent:
     axis: str
     event: str
+
+
+@dataclass(frozen=True, slots=True)
+class Executed:
+    """Trace record: ``tag``'s instruction executed with its axis in leaf state ``axis_state``."""
+
+    tag: str
+    axis_state: str
+
+
+@dataclass(frozen=True, slots=True)
+class Errored:
+    """Trace record: ``tag`` ended with ER because check (or abort) ``check`` failed."""
+
+    tag: str
+    check: str
+    err: int
+    exerr: int
+
+
+@dataclass(frozen=True, slots=True)
+class Done:
+    """Trace record: ``tag`` completed with DN."""
+
+    tag: str
 
 
 @dataclass(frozen=True, slots=True)
@@ -85,6 +121,15 @@ class TagInstance:
         for a in actions:
             a.apply(self.values)
 
+    def snapshot(self) -> tuple[tuple[object, ...], tuple[object, ...], bool]:
+        """(member and internal values, operand values, rung) in declaration order."""
+        return tuple(self.values.values()), tuple(self.operands.values()), self.rung
+
+    def restore(self, snap: tuple[tuple[object, ...], tuple[object, ...], bool]) -> None:
+        values, operands, self.rung = snap
+        self.values.update(zip(self.values, values))
+        self.operands.update(zip(self.operands, operands))
+
     @property
     def flags(self) -> int:
         word = 0
@@ -125,10 +170,18 @@ class System:
         self.index = 0
         self.queue: list[str] = []
         self.held_events: list[EnvironmentEvent] = []
+        #: when a list, scans append Executed / Errored / Done records to it
+        self.trace: list[Executed | Errored | Done] | None = None
 
     # -- the scan ---------------------------------------------------------------
 
     def scan(self, inputs: ScanInputs) -> ScanRecord:
+        """One PLC scan; returns what it did and what could be observed after it."""
+        coarse = self.advance(inputs)
+        return ScanRecord(self.index - 1, coarse, self.observe())
+
+    def advance(self, inputs: ScanInputs) -> bool:
+        """One PLC scan without the observation record; True when it had a coarse update."""
         for name, rung in inputs.rungs.items():
             self.tags[name].rung = rung
         for name, ops in inputs.operands.items():
@@ -144,9 +197,33 @@ class System:
             coarse = self.index % self.scans_per_update == 0
             if coarse:
                 self._coarse_update()
-        record = ScanRecord(self.index, coarse, self.observe())
         self.index += 1
-        return record
+        return coarse
+
+    # -- state ----------------------------------------------------------------------
+
+    def snapshot(self) -> tuple[object, ...]:
+        """The whole state as nested tuples: (phase of the coarse-update clock, axes,
+        tags, request queue, held environment events).  The scan counter itself is not
+        state; only its phase decides when the next coarse update comes."""
+        return (
+            self.index % self.scans_per_update,
+            tuple(a.snapshot() for a in self.axes.values()),
+            tuple(t.snapshot() for t in self.tags.values()),
+            tuple(self.queue),
+            tuple((e.axis, e.event) for e in self.held_events),
+        )
+
+    def restore(self, snap: tuple[object, ...]) -> None:
+        """Make the system be in a state taken by :meth:`snapshot`."""
+        phase, axes, tags, queue, held = snap
+        self.index = phase  # type: ignore[assignment]
+        for axis, a in zip(self.axes.values(), axes):  # type: ignore[call-overload]
+            axis.restore(a)
+        for tag, t in zip(self.tags.values(), tags):  # type: ignore[call-overload]
+            tag.restore(t)
+        self.queue = list(queue)  # type: ignore[call-overload]
+        self.held_events = [EnvironmentEvent(a, e) for a, e in held]  # type: ignore[attr-defined]
 
     def _row(self, tag: TagInstance, condition: str) -> None:
         row = tag.instruction.table.row(condition)
@@ -172,12 +249,16 @@ class System:
         return None
 
     def _fail(self, tag: TagInstance, check: ir.Check) -> None:
+        if self.trace is not None:
+            self.trace.append(Errored(tag.name, check.id, check.err, check.exerr))
         tag.values["ERR"] = check.err
         tag.values["EXERR"] = check.exerr
         tag.run(tag.instruction.table.on_error)
 
     def _execute(self, tag: TagInstance) -> None:
         table = tag.instruction.table
+        if self.trace is not None:
+            self.trace.append(Executed(tag.name, self.axes[tag.axis].leaf.id))
         tag.run(table.on_execute)
         failed = self._first_failure(tag, (ir.Stage.EXECUTE,))
         if failed is not None:
@@ -206,23 +287,30 @@ class System:
                     for a in request.actions:
                         axis.env[a.target.removeprefix("axis.")] = a.value(env)
                     axis.send(request.event)
+                # the axis answers this request before it processes the next one
+                self._finish(tag)
             axis.send("tick")
             for ev in events:
                 if ev.axis == axis.name:
                     axis.apply_event_actions(ev.event)
                     axis.send(ev.event)
         for tag in self.tags.values():
-            if not tag.values.get("pending") or tag.name in self.queue:
-                continue
-            ins = tag.instruction
-            env = self._check_env(tag)
-            if ins.done_when is None or ins.done_when(env):
-                tag.run(ins.table.on_done)
-                continue
-            for ab in ins.aborts:
-                if ab.fails_when(env):
-                    self._fail(tag, ab)
-                    break
+            if tag.values.get("pending") and tag.name not in self.queue:
+                self._finish(tag)
+
+    def _finish(self, tag: TagInstance) -> None:
+        """DN when the completion condition holds, else ER when an abort holds."""
+        ins = tag.instruction
+        env = self._check_env(tag)
+        if ins.done_when is None or ins.done_when(env):
+            if self.trace is not None:
+                self.trace.append(Done(tag.name))
+            tag.run(ins.table.on_done)
+            return
+        for ab in ins.aborts:
+            if ab.fails_when(env):
+                self._fail(tag, ab)
+                return
 
     # -- observation --------------------------------------------------------------
 

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep install deps-system lint clean
+.PHONY: check test deep generate install deps-system lint clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -36,6 +36,10 @@ check: install
 
 test: install
 	@$(BIN)/python -m pytest
+
+# Diagrams, reference docs and SCXML in generated/, rebuilt from the spec.
+generate: install
+	@$(BIN)/motionchart generate
 
 # Longer property-based runs than CI affords.
 deep: install

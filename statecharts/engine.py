@@ -39,6 +39,10 @@ from statecharts.expr import Assignment
 DEFAULT_PARAMETERS: dict[str, int] = {"coarse_update_ms": 10, "scan_ms": 10}
 
 
+#: An event no chart declares: sending it only lets eventless transitions run.
+SETTLE_EVENT = "_settle"
+
+
 class ChartModel:
     """The model object python-statemachine calls back into; holds one axis's variables."""
 
@@ -99,7 +103,13 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
             if state.kind is ir.StateKind.COMPOUND:
                 d["states"][state.initial]["initial"] = True
         if history:
-            d["history"] = {h.id: {"type": h.history_type or "shallow"} for h in history}
+            # a history state never visited enters its parent's initial state (SCXML's
+            # default history transition)
+            d["history"] = {
+                h.id: {"type": h.history_type or "shallow", "transitions": [{"target": state.initial}]}
+                if state.initial else {"type": h.history_type or "shallow"}
+                for h in history
+            }
         on: dict[str, list[dict[str, Any]]] = {}
         eventless: list[dict[str, Any]] = []
         for t in _ordered(x for x in chart.transitions if x.source == state.id):
@@ -168,7 +178,9 @@ class AxisInstance:
         if variables:
             # explicit set-up values win over entry actions of the initial state
             self.env.update(variables)
-        self._leaf_by_id = {s.id: s for s in chart.states}
+        # eventless transitions enabled by the set-up are taken before the first scan,
+        # whether the axis starts in its initial state or in a named one
+        self.machine.send(SETTLE_EVENT)
 
     def _force(self, state: str, preset: Mapping[str, object]) -> None:
         """Start in ``state``: its configuration is entered and its entry actions run."""

@@ -12,14 +12,15 @@ in ``docs/semantics.md``.  In short, one call of :meth:`System.scan` is one PLC 
    if none fails, ``on_accept`` and the request is queued for its axis.
 2. Coarse update (every ``coarse_update_ms / scan_ms`` scans, the first scan included):
    for each axis in set-up order,
+   o. the drive model advances to the time of this update: the chart receives
+      ``tick`` (so a delay started by a request at this update counts from now);
    a. queued requests in program order: every check of the instruction is evaluated
       again, in order (stage ``message`` included); the first failing one ends the
       instruction with ER; otherwise the request's actions are applied, its event is
       sent to the axis chart, and the instruction is finished at once (DN when its
       completion condition holds, else ER when an abort holds, else it stays
       pending) before the next request is processed;
-   b. the drive model advances: the chart receives ``tick``;
-   c. environment events for the axis are applied (their actions, then the event);
+   b. environment events for the axis are applied (their actions, then the event);
    then every instruction still pending whose request was delivered is finished the
    same way (this is how a delayed completion such as MDO's arrives).  Environment events given on a scan without a coarse update wait for the
    next one.
@@ -161,6 +162,10 @@ class System:
             raise ValueError("scan_ms and coarse_update_ms must be positive")
         self.spec = spec
         self.axes = {a.name: a for a in axes}
+        for a in axes:
+            # the clock parameters are the system's; axis-chart expressions read them
+            a.env["scan_ms"] = scan_ms
+            a.env["coarse_update_ms"] = coarse_update_ms
         self.tags: dict[str, TagInstance] = {}
         for tag, mnemonic, axis in program:
             self.tags[tag] = TagInstance(tag, spec.instruction(mnemonic), spec.tag_type, axis)
@@ -272,6 +277,7 @@ class System:
     def _coarse_update(self) -> None:
         events, self.held_events = self.held_events, []
         for axis in self.axes.values():
+            axis.send("tick")
             for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
                 self.queue.remove(name)
                 tag = self.tags[name]
@@ -289,7 +295,6 @@ class System:
                     axis.send(request.event)
                 # the axis answers this request before it processes the next one
                 self._finish(tag)
-            axis.send("tick")
             for ev in events:
                 if ev.axis == axis.name:
                     axis.apply_event_actions(ev.event)

@@ -1,0 +1,246 @@
+"""IR instruction -> manual-style flowchart: its ordered checks, each failure to its ERR box.
+
+Pipeline position: IR -> **flowchart** (a small neutral model) -> DOT here and Mermaid in
+:mod:`statecharts.render.mermaid` -> ``generated/flowcharts/<MNEMONIC>.{dot,mmd,svg}``.
+
+The flowchart is what a motion manual calls the instruction's "Flow Chart (True)",
+derived entirely from the IR, so every instruction -- and any instruction added to the
+spec later -- gets one:
+
+1. the rung-condition-in true row of the execution table: its guard (``not EN``) as a
+   decision, its actions and the ``on_execute`` actions as one box;
+2. one decision per precondition check, top to bottom in the documented order; the
+   failing branch of each goes right, to a box with its ``ERR`` (and ``EXERR``), the
+   error's name from the catalog and the ``on_error`` actions.  A check of stage
+   ``message`` is marked as answered by the motion task at the coarse update;
+3. the accepted request (``on_accept``), the event the axis chart receives at the
+   coarse update, the completion condition (``DN``), the aborts (``ER``), and the loop
+   of a request still in progress.
+
+The order of decisions is the spec's order of checks, which is the order in which
+:mod:`statecharts.scan` evaluates them; the flowchart is drawn from the same IR the
+engine runs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import graphviz
+
+from statecharts import ir
+from statecharts.render.dot import FONT, MONO, html_lines, html_table, sorted_attrs
+from statecharts.render.labels import paragraph, wrap
+
+#: Node kinds of a flowchart and what they mean.
+KINDS = ("terminal", "process", "decision", "error", "done", "wait", "note")
+
+
+@dataclass(frozen=True, slots=True)
+class FlowNode:
+    id: str
+    kind: str  # one of KINDS
+    title: tuple[str, ...]  # prose lines
+    detail: tuple[str, ...] = ()  # expression or action lines (monospace)
+
+
+@dataclass(frozen=True, slots=True)
+class FlowEdge:
+    source: str
+    target: str
+    label: str = ""  # "yes" / "no" on decisions
+    back: bool = False  # a loop back up the chart
+
+
+@dataclass(frozen=True, slots=True)
+class Flowchart:
+    id: str
+    title: str
+    note: tuple[str, ...]
+    nodes: tuple[FlowNode, ...]
+    edges: tuple[FlowEdge, ...]
+    side: tuple[tuple[str, str], ...]  # (decision, error box) pairs drawn side by side
+    spine: tuple[str, ...]  # the main flow, drawn on one vertical line
+
+
+def _error_name(spec: ir.Spec, ins: ir.Instruction, check: ir.Check) -> str:
+    if check.exerr:
+        for x in spec.extended_errors:
+            if (x.instruction, x.err, x.exerr) == (ins.id, check.err, check.exerr):
+                return x.name
+    try:
+        return spec.error(check.err).name
+    except KeyError:
+        return ""
+
+
+def _error_box(spec: ir.Spec, ins: ir.Instruction, check: ir.Check, node_id: str) -> FlowNode:
+    code = f"ERR = {check.err}" + (f", EXERR = {check.exerr}" if check.exerr else "")
+    name = _error_name(spec, ins, check)
+    detail = tuple(a.text for a in ins.table.on_error if a.text not in ("ER = True",))
+    title = ("ER set", code) + ((name,) if name else ())
+    return FlowNode(node_id, "error", title, detail)
+
+
+def build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
+    """The flowchart of ``ins`` (see the module docstring for what it shows)."""
+    nodes: list[FlowNode] = []
+    edges: list[FlowEdge] = []
+    side: list[tuple[str, str]] = []
+    table = ins.table
+    row = table.row("rung_true")
+
+    nodes.append(FlowNode("start", "terminal", ("Rung-condition-in true",)))
+    prev = "start"
+    if row is not None and row.guard is not None:
+        nodes.append(FlowNode("row_guard", "decision", ("Execute now?",), (row.guard.text,)))
+        nodes.append(FlowNode("row_skip", "terminal", ("No action",)))
+        edges.append(FlowEdge(prev, "row_guard"))
+        edges.append(FlowEdge("row_guard", "row_skip", "no"))
+        side.append(("row_guard", "row_skip"))
+        prev = "row_guard"
+    acts = tuple(a.text for a in (row.actions if row else ())) + tuple(a.text for a in table.on_execute)
+    nodes.append(FlowNode("execute", "process", ("Instruction executes",), acts))
+    edges.append(FlowEdge(prev, "execute", "yes" if prev == "row_guard" else ""))
+    prev = "execute"
+
+    message_note = False
+    for n, check in enumerate(ins.checks, start=1):
+        did, eid = f"check_{check.id}", f"err_{check.id}"
+        title = [f"{n}. {line}" if i == 0 else line for i, line in enumerate(paragraph(check.description, 30))]
+        if check.stage is ir.Stage.MESSAGE:
+            title.append("(answered at the coarse update)")
+            message_note = True
+        nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(check.fails_when.text, 30))))
+        nodes.append(_error_box(spec, ins, check, eid))
+        edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
+        edges.append(FlowEdge(did, eid, "yes"))
+        side.append((did, eid))
+        prev = did
+
+    accept = ["Request accepted"]
+    accept_detail = [a.text for a in table.on_accept]
+    if ins.request is not None:
+        accept.append(f"the axis receives {ins.request.event} at the coarse update")
+        accept_detail.extend(a.text for a in ins.request.actions)
+    accept_lines = [line for text in accept_detail for line in wrap(text, 44)]
+    nodes.append(FlowNode("accept", "process", tuple(accept), tuple(accept_lines)))
+    edges.append(FlowEdge(prev, "accept", "no" if prev.startswith("check_") else ""))
+    prev = "accept"
+
+    done_actions = tuple(a.text for a in table.on_done)
+    if ins.done_when is None:
+        nodes.append(FlowNode("done", "done", ("DN set", "done when the axis accepts the request"), done_actions))
+        edges.append(FlowEdge(prev, "done"))
+    else:
+        nodes.append(FlowNode("done_when", "decision", ("Completed?",), tuple(wrap(ins.done_when.text, 30))))
+        nodes.append(FlowNode("done", "done", ("DN set",), done_actions))
+        edges.append(FlowEdge(prev, "done_when"))
+        edges.append(FlowEdge("done_when", "done", "yes"))
+        prev, label = "done_when", "no"
+        for abort in ins.aborts:
+            did, eid = f"abort_{abort.id}", f"err_{abort.id}"
+            nodes.append(FlowNode(did, "decision", tuple(paragraph(abort.description, 30)),
+                                  tuple(wrap(abort.fails_when.text, 30))))
+            nodes.append(_error_box(spec, ins, abort, eid))
+            edges.append(FlowEdge(prev, did, label))
+            edges.append(FlowEdge(did, eid, "yes"))
+            side.append((did, eid))
+            prev, label = did, "no"
+        nodes.append(FlowNode("wait", "wait", ("Request in progress", "checked again at the next coarse update")))
+        edges.append(FlowEdge(prev, "wait", label))
+        edges.append(FlowEdge("wait", "done_when", back=True))
+        side.append(("done_when", "done"))
+        if ins.aborts:  # the loop comes back up beside the aborts; else straight below
+            side.append(("wait", "done_when"))
+
+    note: list[str] = [
+        "Checks are evaluated top to bottom; the first that holds sets ER with its code.",
+    ]
+    if message_note:
+        note.append("When the motion task processes the request at the coarse update, every check is")
+        note.append("evaluated again in this order against the axis as it is then.")
+    spine = tuple(n.id for n in nodes if n.kind in ("terminal", "process", "decision") and n.id != "row_skip")
+    return Flowchart(ins.id, f"{ins.id} {ins.name}: execution with rung-condition-in true",
+                     tuple(note), tuple(nodes), tuple(edges), tuple(side), spine)
+
+
+# --------------------------------------------------------------------------- DOT
+
+_FILLS = {
+    "terminal": "#e8edf5", "process": "#f4f6fa", "decision": "#fff8e1", "error": "#fde8e8",
+    "done": "#e6f4ea", "wait": "#f4f6fa", "note": "#ffffff",
+}
+_BORDERS = {
+    "terminal": "#3c4a5c", "process": "#3c4a5c", "decision": "#9a7b00", "error": "#a31515",
+    "done": "#1e7b34", "wait": "#3c4a5c", "note": "#8a94a6",
+}
+_SHAPES = {
+    "terminal": ("box", "rounded,filled"), "process": ("box", "filled"), "decision": ("diamond", "filled"),
+    "error": ("box", "filled,bold"), "done": ("box", "rounded,filled,bold"), "wait": ("box", "rounded,filled,dashed"),
+    "note": ("note", "filled"),
+}
+
+
+def _node_label(node: FlowNode) -> str:
+    rows = [html_lines(list(node.title), bold=node.kind in ("error", "done", "terminal"))]
+    if node.detail:
+        rows.append(html_lines(list(node.detail), face=MONO, size=9))
+    if node.kind == "decision":
+        # a rule inside a diamond looks like a strike-through: stack without rules
+        return html_table(rows, separators=False)
+    return html_table(rows)
+
+
+def flowchart_dot(fc: Flowchart) -> str:
+    """DOT text of a flowchart: main flow top to bottom, failures to the right."""
+    g = graphviz.Digraph(
+        name=f"{fc.id}_flowchart",
+        graph_attr=sorted_attrs({
+            "fontname": FONT, "fontsize": "11", "labelloc": "t", "labeljust": "l", "rankdir": "TB",
+            "nodesep": "0.5", "ranksep": "0.45", "pad": "0.3", "bgcolor": "white", "newrank": "true",
+            "splines": "spline",
+        }),
+        node_attr=sorted_attrs({"fontname": FONT, "fontsize": "10", "margin": "0.12,0.06"}),
+        edge_attr=sorted_attrs({"fontname": FONT, "fontsize": "9", "arrowsize": "0.8"}),
+    )
+    title = [html_lines([fc.title], bold=True, size=14)]
+    if fc.note:
+        title.append(html_lines(list(fc.note), size=9))
+    g.attr(label=html_table(title, separators=False))
+    main = set(fc.spine)
+    for node in fc.nodes:
+        shape, style = _SHAPES[node.kind]
+        attrs = {
+            "label": _node_label(node), "shape": shape, "style": style,
+            "fillcolor": _FILLS[node.kind], "color": _BORDERS[node.kind],
+        }
+        if node.kind == "decision":
+            attrs["margin"] = "0.02,0.02"
+        if node.id in main:
+            attrs["group"] = "main"  # keeps the main flow on one vertical line
+        g.node(node.id, **sorted_attrs(attrs))
+    for decision, box in fc.side:
+        with g.subgraph() as s:
+            s.attr(rank="same")
+            s.node(decision)
+            s.node(box)
+    for e in fc.edges:
+        attrs = {}
+        if e.label:
+            attrs["label"] = e.label
+            attrs["fontcolor"] = "#a31515" if e.label == "yes" and e.target.startswith("err_") else "#333333"
+        if e.target.startswith("err_"):
+            attrs["color"] = "#a31515"
+        if e.back:
+            attrs["style"] = "dashed"
+        g.edge(e.source, e.target, **sorted_attrs(attrs))
+    return g.source
+
+
+def instruction_dot(spec: ir.Spec, ins: ir.Instruction) -> str:
+    """The DOT text of ``ins``'s flowchart."""
+    return flowchart_dot(build_flowchart(spec, ins))
+
+
+__all__ = ["FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "flowchart_dot", "instruction_dot"]

@@ -1,0 +1,119 @@
+"""Run the scenarios and record what each one exercises: states reached, codes produced.
+
+Pipeline position: IR + scenario files -> :mod:`statecharts.scenario` (load, run) ->
+**traceability** -> the traceability matrix of the reference docs.
+
+What a scenario exercises is read from its *run*, not from its ``covers:`` list: every
+scan's observations give each axis's active leaf state (its ancestors are active too)
+and each tag's ``ER`` / ``ERR`` / ``EXERR`` / ``DN``.  ``covers:`` and ``sources:`` are
+kept to be shown beside the observed facts.  A scenario that cannot be loaded or
+crashes is reported, never raised: generated docs must not depend on every scenario
+being valid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from statecharts import ir
+from statecharts.diagnostics import InputError
+from statecharts.scenario import load_scenario, run_scenario, scenario_files
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class ScenarioRun:
+    """One scenario run and what it exercised."""
+
+    path: str  # as shown in the docs: "scenarios/noncip/mso_enable.yaml"
+    name: str
+    passed: bool
+    scans: int
+    covers: tuple[str, ...]
+    sources: tuple[str, ...]
+    states: frozenset[tuple[str, str]]  # (chart id, state id) observed active
+    errors: frozenset[tuple[str, int, int]]  # (instruction, ERR, EXERR) observed with ER set
+    done: frozenset[str]  # instructions observed with DN set
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class ScenarioProblem:
+    path: str
+    message: str
+
+
+@dataclass(frozen=True, slots=True)
+class Traceability:
+    runs: tuple[ScenarioRun, ...]
+    problems: tuple[ScenarioProblem, ...]
+    root: str | None  # the scenario directory as shown, or None when there was none
+    link_base: str = ""  # from the output directory to the scenario paths' base ("../")
+
+    def reaching(self, chart: str, state: str) -> list[ScenarioRun]:
+        return [r for r in self.runs if (chart, state) in r.states]
+
+    def producing(self, instruction: str, err: int, exerr: int) -> list[ScenarioRun]:
+        return [r for r in self.runs if (instruction, err, exerr) in r.errors]
+
+    def completing(self, instruction: str) -> list[ScenarioRun]:
+        return [r for r in self.runs if instruction in r.done]
+
+
+def display_path(path: Path, root: Path) -> str:
+    """``path`` relative to the parent of the scenario root (never absolute)."""
+    p = path.resolve()
+    base = root.resolve().parent if root.is_dir() else root.resolve().parent
+    try:
+        return p.relative_to(base).as_posix()
+    except ValueError:
+        return p.name
+
+
+def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
+    """Load and run every scenario under ``roots``; collect what each exercised."""
+    runs: list[ScenarioRun] = []
+    problems: list[ScenarioProblem] = []
+    existing = [Path(r) for r in roots if Path(r).exists()]
+    if not existing:
+        return Traceability((), (), None)
+    for root in existing:
+        for f in scenario_files([root]):
+            shown = display_path(f, root)
+            try:
+                scenario = load_scenario(f, spec)
+            except InputError as exc:
+                first = exc.diagnostics[0] if exc.diagnostics else None
+                where = f"line {first.line}: {first.message}" if first else str(exc)
+                more = f" (and {len(exc.diagnostics) - 1} more)" if len(exc.diagnostics) > 1 else ""
+                problems.append(ScenarioProblem(shown, f"does not load: {where}{more}"))
+                continue
+            try:
+                result = run_scenario(scenario, spec)
+            except Exception as exc:  # noqa: BLE001 - a crashing scenario is reported, not raised
+                problems.append(ScenarioProblem(shown, f"crashed: {type(exc).__name__}: {exc}"))
+                continue
+            charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
+            instr = {p.tag: p.instruction for p in scenario.program}
+            states: set[tuple[str, str]] = set()
+            errors: set[tuple[str, int, int]] = set()
+            done: set[str] = set()
+            for row in result.rows:
+                for obj, fields in row.record.observations.items():
+                    if obj in charts:
+                        chart = charts[obj]
+                        leaf = fields.get("state")
+                        if isinstance(leaf, str):
+                            states.update((chart.id, s) for s in chart.ancestors(leaf))
+                    elif obj in instr:
+                        if fields.get("ER"):
+                            errors.add((instr[obj], int(fields.get("ERR", 0)), int(fields.get("EXERR", 0))))
+                        if fields.get("DN"):
+                            done.add(instr[obj])
+            runs.append(ScenarioRun(
+                path=shown, name=scenario.name, passed=result.passed, scans=len(result.rows),
+                covers=scenario.covers, sources=scenario.sources, states=frozenset(states),
+                errors=frozenset(errors), done=frozenset(done),
+            ))
+    shown_root = ", ".join(sorted(Path(r).resolve().name for r in existing))
+    return Traceability(tuple(sorted(runs)), tuple(sorted(problems)), shown_root)

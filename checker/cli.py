@@ -10,12 +10,17 @@ never as a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import importlib.metadata
+import io
 import json
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TextIO
 
+from checker import check_cli, render_cli
 from statecharts.diagnostics import InputError
 from statecharts.loader import load_spec
 from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scenario_files
@@ -32,9 +37,17 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(EXIT_USAGE)
 
 
+def _version() -> str:
+    """The installed distribution's version (pyproject.toml is the one place it is written)."""
+    try:
+        return importlib.metadata.version("motionchart")
+    except importlib.metadata.PackageNotFoundError:  # running from a checkout that is not installed
+        return "0+unknown"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="motionchart", description="Executable, checkable specification of Logix motion behaviour.")
-    parser.add_argument("--version", action="version", version="motionchart 0.1.0")
+    parser.add_argument("--version", action="version", version=f"motionchart {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     v = sub.add_parser("validate", help="check spec files (default: the bundled spec)")
@@ -46,12 +59,20 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.add_argument("--quiet", "-q", action="store_true", help="print only the summary line of each scenario")
+
+    check_cli.register(sub)
+    render_cli.register(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit code (also for ``--version``/``--help``/usage errors)."""
+    _tolerant_streams()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse exits for --version, --help and usage errors
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     if args.command is None:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
@@ -60,17 +81,36 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _validate(args, sys.stdout)
         if args.command == "simulate":
             return _simulate(args, sys.stdout)
+        for extension in (check_cli, render_cli):
+            code = extension.dispatch(args)
+            if code is not None:
+                return code
     except InputError as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return EXIT_FAIL
     except BrokenPipeError:
+        # the reader went away (``| head``): say nothing more, not even at exit
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return EXIT_OK
+    except KeyboardInterrupt:
+        print("motionchart: interrupted", file=sys.stderr)
+        return 130
     return EXIT_USAGE
 
 
+def _tolerant_streams() -> None:
+    """Spec text can hold any character; never fail printing it on a narrow console encoding."""
+    for stream in (sys.stdout, sys.stderr):
+        if isinstance(stream, io.TextIOWrapper):
+            with contextlib.suppress(ValueError, OSError):
+                stream.reconfigure(errors="backslashreplace")
+
+
 def _missing(paths: Sequence[str]) -> list[str]:
-    return [p for p in paths if not Path(p).exists()]
+    # an empty argument would name the current directory and load everything under it
+    return [repr(p) if not p else p for p in paths if not p or not Path(p).exists()]
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
@@ -82,7 +122,8 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         spec = load_spec(args.paths or None)
     except InputError as exc:
         if args.json:
-            json.dump({"valid": False, "errors": [str(d) for d in exc.diagnostics]}, out, indent=2, sort_keys=True)
+            json.dump({"valid": False, "errors": [str(d) for d in exc.diagnostics],
+                       "diagnostics": [d.as_dict() for d in exc.diagnostics]}, out, indent=2, sort_keys=True)
             out.write("\n")
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
@@ -157,22 +198,32 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
     if missing:
         print(f"motionchart simulate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
         return EXIT_USAGE
-    spec = load_spec(args.spec)
     files = scenario_files(args.scenarios)
     if not files:
-        print("motionchart simulate: no scenario files found", file=sys.stderr)
+        print("motionchart simulate: no scenario files (*.yaml, *.yml, *.json) found", file=sys.stderr)
         return EXIT_USAGE
+    try:
+        spec = load_spec(args.spec)
+    except InputError as exc:
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        print(f"{len(exc.diagnostics)} error(s) in the spec", file=sys.stderr)
+        if args.json:
+            json.dump({"results": [], "input_errors": [str(d) for d in exc.diagnostics], "passed": 0, "failed": 0},
+                      out, indent=2, sort_keys=True)
+            out.write("\n")
+        return EXIT_FAIL
     results: list[ScenarioResult] = []
     input_errors: list[str] = []
     for f in files:
         try:
             scenario = load_scenario(f, spec)
+            result = run_scenario(scenario, spec)
         except InputError as exc:
             input_errors.extend(str(d) for d in exc.diagnostics)
             for d in exc.diagnostics:
                 print(d, file=sys.stderr)
             continue
-        result = run_scenario(scenario, spec)
         results.append(result)
         if not args.json:
             if not args.quiet:

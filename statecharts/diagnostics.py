@@ -24,6 +24,11 @@ class Diagnostic:
         where = f"{self.file}:{self.line}:{self.column}"
         return f"{where}: {self.path}: {self.message}" if self.path else f"{where}: {self.message}"
 
+    def as_dict(self) -> dict[str, object]:
+        """The record for ``--json`` output."""
+        return {"file": self.file, "line": self.line, "column": self.column, "path": self.path,
+                "message": self.message}
+
 
 class InputError(ValueError):
     """A user-supplied file is wrong; ``diagnostics`` says where and why."""
@@ -52,22 +57,30 @@ def node_path(parts: tuple[Any, ...] | list[Any]) -> str:
     return out
 
 
-def locate(root: Any, parts: tuple[Any, ...] | list[Any]) -> tuple[int, int]:
+def locate(root: Any, parts: tuple[Any, ...] | list[Any], *, key: bool = False) -> tuple[int, int]:
     """1-based (line, column) of the node at ``parts`` in a ruamel round-trip tree.
 
-    Falls back to the nearest located ancestor when a node carries no position
-    (plain scalars do not; their parent mapping or sequence does).
+    With ``key=True`` and a mapping key as the last part, the position of the key
+    itself (for "unknown key" errors) rather than of its value.  Falls back to the
+    nearest located ancestor when a node carries no position (plain scalars do not;
+    their parent mapping or sequence does), and to line 1 for trees without
+    positions (JSON).
     """
     line, col = 1, 1
     node = root
-    for p in parts:
+    last = len(parts) - 1
+    for n, p in enumerate(parts):
         lc = getattr(node, "lc", None)
         try:
             if lc is not None:
-                if isinstance(p, int):
+                if isinstance(p, int) and isinstance(node, list):
                     pos = lc.item(p)
+                elif not isinstance(node, dict) or p not in node:
+                    pos = None
+                elif key and n == last:
+                    pos = lc.key(p)
                 else:
-                    pos = lc.value(p) if p in node else None
+                    pos = lc.value(p)
                 if pos is not None:
                     line, col = pos[0] + 1, pos[1] + 1
             node = node[p]

@@ -141,6 +141,8 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
         validate_final_reachability=False,
     )
     machine.allow_event_without_transition = True
+    # an error in a guard or action is a spec error to report, not an event to process
+    machine.catch_errors_as_events = False
     return machine, model_cls
 
 

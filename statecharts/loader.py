@@ -1,20 +1,35 @@
 """Load a motionchart specification: YAML -> JSON Schema -> semantic checks -> frozen IR.
 
 Pipeline position: first stage.  :func:`load_spec` reads every ``*.yaml`` file of the
-spec (the bundled one by default), validates each against the shipped JSON Schema,
-resolves references across files, parses every guard, check and action with the
-expression language, runs the semantic checks (unknown targets and variables,
-duplicate ids, unreachable states, overlapping guards without a priority, unknown
-interpretations and error codes), and returns a :class:`~statecharts.ir.Spec`.
+spec (the bundled one by default; files of another motionchart format, such as the
+model checker's ``motionchart-properties/1``, are left to their own loaders), checks the shape of each YAML tree (no mapping keys
+other than strings, no runaway nesting or alias expansion), validates it against the
+shipped JSON Schema, resolves references across files, parses every guard, check and
+action with the expression language, runs the semantic checks (unknown targets and
+variables, duplicate ids, unreachable states, overlapping guards without a priority,
+unknown interpretations and error codes), and returns a :class:`~statecharts.ir.Spec`.
+
+Each node kind of the spec language has its accepted keys in one module constant
+(``CHART_KEYS``, ``STATE_KEYS``... collected in :data:`NODE_KEYS`).  The builder reads
+YAML mappings only through :class:`_Node`, which refuses a key its kind does not
+declare, and ``tests/test_schema_agreement.py`` asserts that each constant equals the
+properties of the same node in ``spec/schema/spec.schema.json`` -- so the schema and
+the loader cannot drift apart.
 
 All problems of all files are collected and raised together as one
-:class:`~statecharts.diagnostics.SpecError`; nothing downstream ever sees YAML.
+:class:`~statecharts.diagnostics.SpecError`; nothing downstream ever sees YAML.  A file
+that fails to parse or to match the schema is left out of the semantic checks, and so
+are the cross-file checks that would only repeat its failure (unused interpretations,
+unknown charts...).
 """
 
 from __future__ import annotations
 
 import itertools
 import json
+import math
+import re
+import warnings
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -23,7 +38,8 @@ from typing import Any
 
 import jsonschema
 from ruamel.yaml import YAML
-from ruamel.yaml.error import MarkedYAMLError, YAMLError
+from ruamel.yaml.error import MarkedYAMLError
+from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
@@ -31,6 +47,10 @@ from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_ass
 
 SPEC_FORMAT = "motionchart-spec/1"
 MAX_FILE_BYTES = 2_000_000
+#: Deepest nesting of YAML mappings and sequences accepted (the spec needs about 12).
+MAX_YAML_DEPTH = 64
+#: Most YAML nodes a file may expand to, counting each use of an alias (``*name``).
+MAX_YAML_NODES = 200_000
 
 #: Names every axis-chart expression may read besides the chart's own variables.
 SYSTEM_PARAMETERS: dict[str, tuple[int, ...]] = {"coarse_update_ms": (10,), "scan_ms": (10,)}
@@ -38,6 +58,113 @@ SYSTEM_PARAMETERS: dict[str, tuple[int, ...]] = {"coarse_update_ms": (10,), "sca
 AXIS_READ_ONLY = ("active", "state", "chart")
 #: Largest number of variable assignments enumerated to show two guards disjoint.
 OVERLAP_ENUMERATION_LIMIT = 20_000
+
+# --------------------------------------------------------------------------- the keys of each node kind
+# One constant per node kind of the spec language: the keys the loader accepts and
+# reads.  tests/test_schema_agreement.py compares each with the JSON Schema.
+
+_PROVENANCE = frozenset({"source", "interpretation"})
+FILE_KEYS = frozenset(
+    {"format", "chart", "instruction", "tag_type", "execution_tables", "interpretations", "errors", "extended_errors"}
+)
+CHART_KEYS = frozenset(
+    {"id", "name", "kind", "state_attribute", "axis_types", "description", "variables", "events", "states",
+     "initial", "transitions"}
+) | _PROVENANCE
+STATE_KEYS = frozenset(
+    {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states"}
+) | _PROVENANCE
+TRANSITION_KEYS = frozenset({"id", "from", "to", "event", "guard", "actions", "priority"}) | _PROVENANCE
+VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description"}) | _PROVENANCE
+EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
+INSTRUCTION_KEYS = frozenset(
+    {"id", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
+     "aborts", "request", "done", "status_bits"}
+) | _PROVENANCE
+OPERAND_KEYS = frozenset(
+    {"name", "type", "domain", "range", "text_values", "default", "description"}
+) | _PROVENANCE
+CHECK_KEYS = frozenset({"id", "fails_when", "err", "exerr", "stage", "description"}) | _PROVENANCE
+ABORT_KEYS = frozenset({"id", "when", "err", "exerr", "description"}) | _PROVENANCE
+REQUEST_KEYS = frozenset({"event", "actions"})
+DONE_KEYS = frozenset({"when"}) | _PROVENANCE
+EXECUTION_TABLE_KEYS = frozenset(
+    {"id", "rows", "on_execute", "on_error", "on_accept", "on_done"}
+) | _PROVENANCE
+TABLE_ROW_KEYS = frozenset({"condition", "guard", "actions", "execute", "description"}) | _PROVENANCE
+TABLE_BLOCK_KEYS = frozenset({"actions"}) | _PROVENANCE
+TAG_TYPE_KEYS = frozenset({"name", "members", "internal", "source"})
+TAG_MEMBER_KEYS = frozenset({"name", "type", "bit", "description", "source"})
+INTERPRETATION_KEYS = frozenset({"id", "title", "confidence", "text", "evidence"})
+ERROR_KEYS = frozenset({"code", "name", "meaning", "confidence"}) | _PROVENANCE
+EXTENDED_ERROR_KEYS = frozenset(
+    {"instruction", "err", "exerr", "name", "meaning", "confidence"}
+) | _PROVENANCE
+
+#: Every node kind and its keys (``tag_type.internal`` items are variables).
+NODE_KEYS: dict[str, frozenset[str]] = {
+    "file": FILE_KEYS,
+    "chart": CHART_KEYS,
+    "state": STATE_KEYS,
+    "transition": TRANSITION_KEYS,
+    "variable": VARIABLE_KEYS,
+    "event": EVENT_KEYS,
+    "instruction": INSTRUCTION_KEYS,
+    "operand": OPERAND_KEYS,
+    "check": CHECK_KEYS,
+    "abort": ABORT_KEYS,
+    "request": REQUEST_KEYS,
+    "done": DONE_KEYS,
+    "execution_table": EXECUTION_TABLE_KEYS,
+    "table_row": TABLE_ROW_KEYS,
+    "table_block": TABLE_BLOCK_KEYS,
+    "tag_type": TAG_TYPE_KEYS,
+    "tag_member": TAG_MEMBER_KEYS,
+    "interpretation": INTERPRETATION_KEYS,
+    "error": ERROR_KEYS,
+    "extended_error": EXTENDED_ERROR_KEYS,
+}
+
+
+class _Node:
+    """Read access to one schema-checked YAML mapping, limited to the keys of its kind.
+
+    Reading a key that the kind's constant does not declare is a bug in the loader
+    (the schema would have let such a key through unchecked), so it fails loudly.
+    """
+
+    __slots__ = ("kind", "keys", "raw")
+
+    def __init__(self, raw: Any, kind: str) -> None:
+        self.kind = kind
+        self.keys = NODE_KEYS[kind]
+        self.raw = raw
+
+    def _declared(self, key: str) -> None:
+        if key not in self.keys:
+            raise AssertionError(f"the loader reads {key!r} of a {self.kind}, which NODE_KEYS[{self.kind!r}] does not declare")
+
+    def declares(self, key: str) -> bool:
+        return key in self.keys
+
+    def __getitem__(self, key: str) -> Any:
+        self._declared(key)
+        return self.raw[key]
+
+    def get(self, key: str, default: Any = None) -> Any:
+        self._declared(key)
+        return self.raw.get(key, default)
+
+    def __contains__(self, key: str) -> bool:
+        self._declared(key)
+        return key in self.raw
+
+    def items(self, key: str, kind: str) -> list[_Node]:
+        """The mappings of the list under ``key``, each read as a ``kind`` node."""
+        return [_Node(x, kind) for x in self.get(key) or ()]
+
+    def child(self, key: str, kind: str) -> _Node:
+        return _Node(self[key], kind)
 
 
 def bundled_spec_dir() -> Path:
@@ -68,7 +195,10 @@ def spec_files(paths: Sequence[Path | str] | None = None) -> list[Path]:
 
 
 def _plain(node: Any) -> Any:
-    """ruamel round-trip tree -> plain dicts/lists (for the JSON Schema validator)."""
+    """ruamel round-trip tree -> plain dicts/lists (for the JSON Schema validator).
+
+    Only called on trees that passed :func:`tree_diagnostics` (bounded depth and size).
+    """
     if isinstance(node, dict):
         return {str(k): _plain(v) for k, v in node.items()}
     if isinstance(node, list):
@@ -84,8 +214,61 @@ def _plain(node: Any) -> Any:
     return node
 
 
+def _key_text(key: Any) -> str:
+    text = repr(key)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def tree_diagnostics(name: str, tree: Any, *, what: str = "file") -> tuple[list[Diagnostic], bool]:
+    """Shape problems of a parsed YAML tree: (diagnostics, fatal?).
+
+    Mapping keys must be strings (``1:``, ``true:``, ``null:`` or ``? [a, b]`` keys would
+    silently turn into text for the schema and into surprises after it).  Nesting deeper
+    than :data:`MAX_YAML_DEPTH` and trees that expand to more than :data:`MAX_YAML_NODES`
+    nodes through aliases (the "billion laughs") are fatal: nothing else is checked.
+    The walk is iterative, so no input can exhaust the recursion limit here.
+    """
+    out: list[Diagnostic] = []
+    count = 0
+    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
+    while stack:
+        node, parts = stack.pop()
+        count += 1
+        if count > MAX_YAML_NODES:
+            return [Diagnostic(name, 1, 1, "", (
+                f"{what} expands to more than {MAX_YAML_NODES} YAML nodes (aliases `*name` used too often?)"))], True
+        if len(parts) > MAX_YAML_DEPTH:
+            line, col = locate(tree, parts)
+            return [Diagnostic(name, line, col, node_path(parts[:MAX_YAML_DEPTH]), (
+                f"nesting deeper than {MAX_YAML_DEPTH} levels"))], True
+        if isinstance(node, dict):
+            for k, v in node.items():
+                if not isinstance(k, str):
+                    lc = getattr(node, "lc", None)
+                    line, col = locate(tree, parts)
+                    try:
+                        if lc is not None:
+                            kline, kcol = lc.key(k)
+                            line, col = kline + 1, kcol + 1
+                    except (KeyError, TypeError, AttributeError):
+                        pass
+                    out.append(Diagnostic(name, line, col, node_path(parts) or "(document)", (
+                        f"mapping key {_key_text(k)} is not a string; write the key in quotes")))
+                    continue
+                stack.append((v, (*parts, k)))
+        elif isinstance(node, list):
+            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
+    return out, False
+
+
 def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
-    """Parse one YAML file; a syntax error becomes a located diagnostic, never a traceback."""
+    """Parse one YAML file; every problem becomes a located diagnostic, never a traceback.
+
+    Returns the ruamel round-trip tree, or ``None`` when there is nothing to check
+    further (unreadable, not UTF-8, not YAML, empty, or a fatal shape problem).  A
+    tree can be returned together with new diagnostics (e.g. a non-string key): the
+    caller must not build from a file that added diagnostics.
+    """
     name = str(path)
     try:
         raw = path.read_bytes()
@@ -98,37 +281,215 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start})"))
+        line = raw[: exc.start].count(b"\n") + 1
+        col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
+        errors.append(Diagnostic(name, line, col, "", (
+            f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start}); save it as UTF-8")))
+        return None
+    deep = _flow_nesting(text)
+    if deep is not None:
+        errors.append(Diagnostic(name, deep[0], deep[1], "", f"nesting deeper than {MAX_YAML_DEPTH} levels"))
         return None
     yaml = YAML(typ="rt")
     try:
-        return yaml.load(text)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # e.g. ReusedAnchorWarning: not ours to print
+            tree = yaml.load(text)
     except MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
         problem = exc.problem or exc.context or "invalid YAML"
         errors.append(Diagnostic(name, line, col, "", f"YAML syntax error: {problem}"))
-    except (YAMLError, ValueError, TypeError, RecursionError) as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"YAML error: {exc}"))
+        return None
+    except RecursionError:
+        line, col = _deep_event(text)
+        errors.append(Diagnostic(name, line, col, "", f"nesting deeper than {MAX_YAML_DEPTH} levels"))
+        return None
+    except Exception as exc:  # noqa: BLE001 - any parser failure on third-party text is a user error
+        mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
+        errors.append(Diagnostic(name, line, col, "", f"YAML error: {exc}".splitlines()[0]))
+        return None
+    problems, fatal = tree_diagnostics(name, tree, what=what)
+    errors.extend(problems)
+    return None if fatal else tree
+
+
+_FLOW_TOKENS = re.compile(r"[\[\]{}#'\"\n]")
+
+
+def _quoted_end(text: str, start: int, quote: str) -> int:
+    """Index of the quote that closes the string opened at ``start`` (or the text's end)."""
+    i = start + 1
+    while True:
+        j = text.find(quote, i)
+        if j < 0:
+            return len(text)
+        if quote == "'":
+            if text.startswith("''", j):  # '' is a quote inside a single-quoted string
+                i = j + 2
+                continue
+            return j
+        backslashes = 0
+        k = j - 1
+        while k > start and text[k] == "\\":
+            backslashes += 1
+            k -= 1
+        if backslashes % 2:
+            i = j + 1
+            continue
+        return j
+
+
+def _flow_nesting(text: str) -> tuple[int, int] | None:
+    """(line, column) where ``[ ]``/``{ }`` nest deeper than MAX_YAML_DEPTH, or None.
+
+    ruamel's scanner takes time quadratic in the depth of flow collections (seconds
+    for a few thousand ``[``) and its composer recurses, so such text is refused
+    before parsing.  The count is a cheap approximation (quoted strings and comments
+    are skipped; a ``[`` inside a plain or block scalar counts), so only text with
+    dozens of unclosed brackets in a scalar could be refused wrongly.
+    """
+    if text.count("[") + text.count("{") <= MAX_YAML_DEPTH:
+        return None
+    depth, line, line_start, i = 0, 1, 0, 0
+    while (m := _FLOW_TOKENS.search(text, i)) is not None:
+        ch, at = m.group(), m.start()
+        i = at + 1
+        if ch == "\n":
+            line, line_start = line + 1, i
+            continue
+        before = text[at - 1] if at else "\n"
+        if ch == "#":
+            if before in " \t\n":
+                nl = text.find("\n", at)
+                if nl < 0:
+                    break
+                i = nl  # the comment's newline is the next token
+        elif ch in "'\"":
+            if before in " \t\n[{,:":
+                end = _quoted_end(text, at, ch)
+                newlines = text.count("\n", at, end)
+                if newlines:
+                    line, line_start = line + newlines, text.rfind("\n", at, end) + 1
+                i = end + 1
+        elif ch in "[{":
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                return line, at - line_start + 1
+        else:
+            depth = max(0, depth - 1)
     return None
+
+
+def _deep_event(text: str) -> tuple[int, int]:
+    """(line, column) where block nesting passes MAX_YAML_DEPTH, found with the
+    (iterative) event parser after the (recursive) composer gave up."""
+    depth = 0
+    try:
+        for event in YAML(typ="rt").parse(text):
+            if isinstance(event, CollectionStartEvent):
+                depth += 1
+                if depth > MAX_YAML_DEPTH and event.start_mark is not None:
+                    return event.start_mark.line + 1, event.start_mark.column + 1
+            elif isinstance(event, CollectionEndEvent):
+                depth -= 1
+    except Exception:  # noqa: BLE001 - only a position is wanted; line 1 will do
+        pass
+    return 1, 1
+
+
+_TYPE_NAMES = {
+    "object": "a mapping", "array": "a list", "string": "a string", "integer": "an integer",
+    "number": "a number", "boolean": "true or false", "null": "nothing",
+}
+
+
+def _instance_text(value: Any) -> str:
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return "a list"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _expected(err: jsonschema.ValidationError) -> str:
+    """What the schema wanted, in words (``err.message`` can quote a whole subtree)."""
+    v, spec, inst = err.validator, err.validator_value, err.instance
+    if v == "type":
+        kinds = [spec] if isinstance(spec, str) else list(spec)
+        return f"expected {' or '.join(_TYPE_NAMES.get(k, k) for k in kinds)}, got {_instance_text(inst)}"
+    if v == "enum":
+        return f"expected one of: {', '.join(map(str, spec))}; got {_instance_text(inst)}"
+    if v == "const":
+        return f"expected {spec!r}, got {_instance_text(inst)}"
+    if v == "pattern":
+        if spec.startswith("^INT-"):
+            return f"expected an interpretation id like INT-007, got {_instance_text(inst)}"
+        if spec == "^[A-Za-z_][A-Za-z0-9_]*$":
+            return f"expected a name (letters, digits and _, not starting with a digit), got {_instance_text(inst)}"
+        return f"expected text matching {spec}, got {_instance_text(inst)}"
+    if v == "minItems":
+        return f"expected at least {spec} item(s), got {len(inst)}"
+    if v == "maxItems":
+        return f"expected at most {spec} item(s), got {len(inst)}"
+    if v == "minLength":
+        return "expected non-empty text"
+    if v == "minProperties":
+        names = sorted(err.schema.get("properties", {}))
+        if names:
+            return f"expected at least {spec} key(s) out of: {', '.join(names)}"
+        return f"expected at least {spec} key(s)"
+    if v in ("minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"):
+        word = {"minimum": ">=", "maximum": "<=", "exclusiveMinimum": ">", "exclusiveMaximum": "<"}[v]
+        return f"expected a number {word} {spec}, got {_instance_text(inst)}"
+    message = err.message
+    return message if len(message) <= 200 else message[:197] + "..."
+
+
+def _node_at(tree: Any, parts: tuple[Any, ...]) -> Any:
+    node = tree
+    for p in parts:
+        try:
+            node = node[p]
+        except (KeyError, IndexError, TypeError):
+            return None
+    return node
 
 
 def schema_diagnostics(
     name: str, tree: Any, schema: dict[str, Any], what: str
 ) -> list[Diagnostic]:
-    """Validate ``tree`` against ``schema``; each violation located at its node."""
+    """Validate ``tree`` against ``schema``; each violation located at its node.
+
+    An unknown key is reported at the key itself, with the keys that are allowed there.
+    """
     validator = jsonschema.Draft202012Validator(schema)
     out = []
     for err in validator.iter_errors(_plain(tree)):
         parts = tuple(err.absolute_path)
-        line, col = locate(tree, parts)
-        message = err.message
-        if err.validator == "additionalProperties":
+        if err.validator == "additionalProperties" and isinstance(err.instance, dict):
             allowed = sorted(err.schema.get("properties", {}))
-            message = f"{err.message}; expected one of: {', '.join(allowed)}"
-        elif err.validator == "required":
-            message = f"{err.message} in {what}"
-        out.append(Diagnostic(name, line, col, node_path(parts) or "(document)", message))
+            parent = _node_at(tree, parts)
+            for key in sorted(set(err.instance) - set(allowed)):
+                if not (isinstance(parent, dict) and key in parent):
+                    continue  # a non-string key: tree_diagnostics reported it already
+                line, col = locate(tree, (*parts, key), key=True)
+                hint = f"expected one of: {', '.join(allowed)}" if allowed else "no keys are allowed here"
+                out.append(Diagnostic(name, line, col, node_path((*parts, key)), f"unknown key {key!r}; {hint}"))
+            if allowed:
+                continue
+        line, col = locate(tree, parts)
+        where = node_path(parts) or "(document)"
+        if err.validator == "required":
+            missing = [k for k in err.validator_value if isinstance(err.instance, dict) and k not in err.instance]
+            message = f"missing required key {', '.join(map(repr, missing)) or err.message}"
+            if not parts:
+                message += f" in {what}"
+        else:
+            message = _expected(err)
+        out.append(Diagnostic(name, line, col, where, message))
     return out
 
 
@@ -139,6 +500,10 @@ def schema_diagnostics(
 class _File:
     name: str
     tree: Any
+
+    @property
+    def top(self) -> _Node:
+        return _Node(self.tree, "file")
 
 
 @dataclass
@@ -157,8 +522,8 @@ class _Builder:
         line, col = locate(f.tree, parts)
         return ir.Location(f.name, line, col, node_path(parts))
 
-    def prov(self, f: _File, parts: tuple[Any, ...], node: dict[str, Any]) -> ir.Provenance:
-        interp = node.get("interpretation")
+    def prov(self, f: _File, parts: tuple[Any, ...], node: _Node) -> ir.Provenance:
+        interp = node.get("interpretation") if node.declares("interpretation") else None
         if interp is not None:
             self.interp_refs.append((str(interp), f, (*parts, "interpretation")))
         return ir.Provenance(str(node.get("source", "")), str(interp) if interp else None)
@@ -188,9 +553,7 @@ class _Builder:
     def _unknown(self, f: _File, parts: tuple[Any, ...], e: Expr, known: Iterable[str]) -> None:
         known_set = set(known)
         for name, _offset in check_names(e, known_set):
-            hint = _closest(name, known_set)
-            extra = f"; did you mean {hint!r}?" if hint else ""
-            self.error(f, parts, f"unknown variable {name!r} in {e.text!r}{extra}")
+            self.error(f, parts, f"unknown variable {name!r}{_hint(name, known_set)} in {e.text!r}")
 
     def actions(
         self, f: _File, parts: tuple[Any, ...], texts: Sequence[str] | None, known: Iterable[str],
@@ -204,7 +567,7 @@ class _Builder:
                 out.append(a)
         return tuple(out)
 
-    def duplicates(self, f: _File, parts: tuple[Any, ...], items: Sequence[dict[str, Any]], key: str, what: str) -> None:
+    def duplicates(self, f: _File, parts: tuple[Any, ...], items: Sequence[_Node], key: str, what: str) -> None:
         seen: dict[Any, int] = {}
         for i, item in enumerate(items):
             k = item.get(key)
@@ -215,24 +578,34 @@ class _Builder:
 
     # -- variables -----------------------------------------------------------
 
-    def variable(self, f: _File, parts: tuple[Any, ...], v: dict[str, Any]) -> ir.Variable:
+    def variable(self, f: _File, parts: tuple[Any, ...], v: _Node) -> ir.Variable:
         vtype = v["type"]
         domain = v.get("domain")
         initial = v["initial"]
         if vtype == "bool":
             domain = [False, True]
             if not isinstance(initial, bool):
-                self.error(f, (*parts, "initial"), f"initial value {initial!r} is not a bool")
+                self.error(f, (*parts, "initial"), f"initial value {initial!r} is not a bool (true or false)")
         elif vtype == "enum":
             if not domain:
                 self.error(f, parts, "an enum variable needs a domain")
                 domain = [initial]
-        elif vtype == "int":
-            if domain is None and "range" in v:
-                lo, hi = int(v["range"][0]), int(v["range"][1])
-                if hi < lo:
-                    self.error(f, (*parts, "range"), f"empty range [{lo}, {hi}]")
-                domain = list(range(lo, hi + 1)) if hi - lo <= 4096 else None
+        elif vtype in ("int", "real"):
+            wanted = "an integer" if vtype == "int" else "a number"
+            for j, value in enumerate(domain or ()):
+                if not _is_number(value, integral=vtype == "int"):
+                    self.error(f, (*parts, "domain", j), f"domain value {value!r} of an {vtype} variable is not {wanted}")
+            if not _is_number(initial, integral=vtype == "int"):
+                self.error(f, (*parts, "initial"), f"initial value {initial!r} of an {vtype} variable is not {wanted}")
+            if vtype == "int" and domain is None and "range" in v:
+                lo_f, hi_f = float(v["range"][0]), float(v["range"][1])
+                if not (math.isfinite(lo_f) and math.isfinite(hi_f)):
+                    self.error(f, (*parts, "range"), f"range bounds must be finite numbers, got [{lo_f}, {hi_f}]")
+                else:
+                    lo, hi = math.ceil(lo_f), math.floor(hi_f)
+                    if hi < lo:
+                        self.error(f, (*parts, "range"), f"empty range [{lo}, {hi}]")
+                    domain = list(range(lo, hi + 1)) if hi - lo <= 4096 else None
         if domain is not None and initial not in domain:
             self.error(f, (*parts, "initial"), f"initial value {initial!r} is not in the domain {list(domain)!r}")
         return ir.Variable(
@@ -244,22 +617,22 @@ class _Builder:
 
     # -- charts --------------------------------------------------------------
 
-    def chart(self, f: _File, c: dict[str, Any]) -> ir.Chart | None:
+    def chart(self, f: _File, c: _Node) -> ir.Chart:
         base: tuple[Any, ...] = ("chart",)
-        var_nodes = list(c.get("variables", []))
+        var_nodes = c.items("variables", "variable")
         self.duplicates(f, (*base, "variables"), var_nodes, "name", "variable")
         variables = tuple(self.variable(f, (*base, "variables", i), v) for i, v in enumerate(var_nodes))
         var_names = [v.name for v in variables]
         known = var_names + list(SYSTEM_PARAMETERS)
 
-        event_nodes = list(c.get("events", []))
+        event_nodes = c.items("events", "event")
         self.duplicates(f, (*base, "events"), event_nodes, "name", "event")
         events = []
         for i, e in enumerate(event_nodes):
             p = (*base, "events", i)
             events.append(ir.Event(
                 name=e["name"], kind=e["kind"], description=str(e.get("description", "")),
-                parameters=tuple(e.get("parameters", [])),
+                parameters=tuple(e.get("parameters") or ()),
                 actions=self.actions(f, (*p, "actions"), e.get("actions"), known, var_names),
                 provenance=self.prov(f, p, e),
             ))
@@ -268,7 +641,8 @@ class _Builder:
         states: list[ir.State] = []
         state_nodes: dict[str, tuple[Any, ...]] = {}
 
-        def walk(nodes: Sequence[dict[str, Any]], parts: tuple[Any, ...], parent: str | None) -> list[str]:
+        def walk(nodes: Sequence[_Node], parts: tuple[Any, ...], parent: str | None) -> list[str]:
+            # recursion depth is bounded by MAX_YAML_DEPTH, checked before the schema
             ids = []
             for i, s in enumerate(nodes):
                 p = (*parts, i)
@@ -277,7 +651,7 @@ class _Builder:
                     self.error(f, (*p, "id"), f"duplicate state id {sid!r}")
                     continue
                 state_nodes[sid] = p
-                children_nodes = list(s.get("states", []))
+                children_nodes = s.items("states", "state")
                 kind_name = s.get("kind") or ("compound" if children_nodes else "atomic")
                 kind = ir.StateKind(kind_name)
                 if kind in (ir.StateKind.COMPOUND, ir.StateKind.PARALLEL) and not children_nodes:
@@ -288,18 +662,22 @@ class _Builder:
                 initial = s.get("initial")
                 if kind is ir.StateKind.COMPOUND:
                     if initial is None:
-                        self.error(f, p, "a compound state must name its initial child (`initial:`)")
+                        self.error(f, p, (
+                            f"compound state {sid!r} must name its initial child (`initial:`); "
+                            f"children: {', '.join(children)}"))
                     elif initial not in children:
                         self.error(f, (*p, "initial"), f"initial {initial!r} is not a child of {sid!r}; children: {', '.join(children)}")
                 elif initial is not None:
                     self.error(f, (*p, "initial"), f"only a compound state has an initial child ({sid!r} is {kind_name})")
-                if kind is ir.StateKind.HISTORY and "history" not in s:
+                history = s.get("history")
+                if kind is ir.StateKind.HISTORY and history is None:
                     self.error(f, p, "a history state must say `history: shallow` or `history: deep`")
+                value = s.get("value")
                 states.append(ir.State(
-                    id=sid, name=str(s.get("name", sid)), kind=kind, value=s.get("value"),
+                    id=sid, name=str(s.get("name", sid)), kind=kind, value=int(value) if value is not None else None,
                     parent=parent, children=tuple(children),
                     initial=initial if kind is ir.StateKind.COMPOUND else None,
-                    history_type=s.get("history"),
+                    history_type=history,
                     entry=self.actions(f, (*p, "entry"), s.get("entry"), known, var_names),
                     exit=self.actions(f, (*p, "exit"), s.get("exit"), known, var_names),
                     description=str(s.get("description", "")),
@@ -308,7 +686,7 @@ class _Builder:
                 ids.append(sid)
             return ids
 
-        top = walk(list(c["states"]), (*base, "states"), None)
+        top = walk(c.items("states", "state"), (*base, "states"), None)
         by_id = {s.id: s for s in states}
         for s in states:
             if s.kind is ir.StateKind.PARALLEL:
@@ -328,20 +706,22 @@ class _Builder:
             if len(top) > 1:
                 self.error(f, base, "a chart with several top-level states must name its initial state (`initial:`)")
         elif root_initial not in top:
-            self.error(f, (*base, "initial"), f"initial {root_initial!r} is not a top-level state")
+            self.error(f, (*base, "initial"), f"initial {root_initial!r} is not a top-level state; top-level states: {', '.join(top)}")
 
-        trans_nodes = list(c.get("transitions", []))
+        trans_nodes = c.items("transitions", "transition")
         self.duplicates(f, (*base, "transitions"), trans_nodes, "id", "transition")
         transitions = []
         for i, t in enumerate(trans_nodes):
             p = (*base, "transitions", i)
             src, dst, ev = t["from"], t.get("to"), t.get("event")
             if src not in by_id:
-                self.error(f, (*p, "from"), f"unknown source state {src!r}; states: {', '.join(sorted(by_id))}")
+                self.error(f, (*p, "from"), f"unknown source state {src!r}{_hint(src, by_id)}; states: {', '.join(sorted(by_id))}")
             if dst is not None and dst not in by_id:
-                self.error(f, (*p, "to"), f"unknown target state {dst!r}; states: {', '.join(sorted(by_id))}")
+                self.error(f, (*p, "to"), f"unknown target state {dst!r}{_hint(dst, by_id)}; states: {', '.join(sorted(by_id))}")
             if ev is not None and ev not in event_names:
-                self.error(f, (*p, "event"), f"unknown event {ev!r}; declare it under chart.events (events: {', '.join(sorted(event_names))})")
+                self.error(f, (*p, "event"), (
+                    f"unknown event {ev!r}{_hint(ev, event_names)}; declare it under chart.events "
+                    f"(events: {', '.join(sorted(event_names))})"))
             if ev is None and "guard" not in t:
                 self.error(f, p, "an eventless transition needs a guard (it would fire forever)")
             if dst is None and not t.get("actions"):
@@ -423,8 +803,7 @@ class _Builder:
     # -- instructions ----------------------------------------------------------
 
     def instruction(
-        self, f: _File, node: dict[str, Any], charts: dict[str, ir.Chart], tables: dict[str, ir.ExecutionTable],
-        tag_type: ir.TagType | None,
+        self, f: _File, node: _Node, charts: dict[str, ir.Chart], tables: dict[str, ir.ExecutionTable],
     ) -> ir.Instruction:
         base: tuple[Any, ...] = ("instruction",)
         chart_list = []
@@ -441,21 +820,23 @@ class _Builder:
         known_axis = [f"axis.{v}" for v in (*axis_vars, *AXIS_READ_ONLY)]
         writable_axis = [f"axis.{v}" for v in axis_vars if v not in {c.state_attribute for c in chart_list}]
 
-        op_nodes = list(node["operands"])
+        op_nodes = node.items("operands", "operand")
         self.duplicates(f, (*base, "operands"), op_nodes, "name", "operand")
         operands = []
         for i, o in enumerate(op_nodes):
             p = (*base, "operands", i)
+            rng = o.get("range")
             operands.append(ir.Operand(
                 name=o["name"], type=o["type"], domain=tuple(o["domain"]) if "domain" in o else None,
-                range=(float(o["range"][0]), float(o["range"][1])) if "range" in o else None,
-                text_values=tuple(sorted(dict(o.get("text_values", {})).items())), default=o.get("default"),
+                range=(float(rng[0]), float(rng[1])) if rng is not None else None,
+                text_values=tuple(sorted((str(k), int(v)) for k, v in dict(o.get("text_values") or {}).items())),
+                default=o.get("default"),
                 description=str(o.get("description", "")), provenance=self.prov(f, p, o),
             ))
         known_ops = [f"op.{o.name}" for o in operands if o.type not in ("axis", "tag")]
         known = known_axis + known_ops
 
-        check_nodes = list(node["checks"])
+        check_nodes = node.items("checks", "check")
         self.duplicates(f, (*base, "checks"), check_nodes, "id", "check")
         checks = []
         for i, ch in enumerate(check_nodes):
@@ -467,7 +848,7 @@ class _Builder:
                 description=str(ch.get("description", "")), provenance=self.prov(f, p, ch), location=self.loc(f, p),
             ))
         aborts = []
-        for i, ab in enumerate(node.get("aborts", [])):
+        for i, ab in enumerate(node.items("aborts", "abort")):
             p = (*base, "aborts", i)
             e = self.expr(f, (*p, "when"), ab["when"], known)
             aborts.append(ir.Check(
@@ -478,55 +859,61 @@ class _Builder:
 
         request = None
         if "request" in node:
-            r = node["request"]
+            r = node.child("request", "request")
             for c in chart_list:
-                if r["event"] not in {e.name for e in c.events if e.kind == "request"}:
-                    self.error(f, (*base, "request", "event"), f"chart {c.id!r} declares no request event {r['event']!r}")
+                requests = sorted(e.name for e in c.events if e.kind == "request")
+                if r["event"] not in requests:
+                    self.error(f, (*base, "request", "event"), (
+                        f"chart {c.id!r} declares no request event {r['event']!r}; request events: {', '.join(requests)}"))
             request = ir.Request(
                 event=r["event"],
                 actions=self.actions(f, (*base, "request", "actions"), r.get("actions"), known, writable_axis),
             )
-        done = node["done"]
+        done = node.child("done", "done")
         done_when = self.expr(f, (*base, "done", "when"), done["when"], known) if "when" in done else None
-        self.prov(f, (*base, "done"), done)
+        done_prov = self.prov(f, (*base, "done"), done)
 
         table_id = node["execution_table"]
         table = tables.get(table_id)
         if table is None:
             self.error(f, (*base, "execution_table"), f"unknown execution table {table_id!r}; tables: {', '.join(sorted(tables))}")
             table = _EMPTY_TABLE
-        all_vars = set(axis_vars)
-        for i, (bit, _value) in enumerate(dict(node.get("status_bits", {})).items()):
-            if bit not in all_vars:
-                self.error(f, (*base, "status_bits"), f"unknown status bit {bit!r}")
+        status_bits = dict(node.get("status_bits") or {})
+        for bit in status_bits:
+            if bit not in axis_vars:
+                self.error(f, (*base, "status_bits", bit), f"unknown status bit {bit!r}{_hint(str(bit), set(axis_vars))}")
         return ir.Instruction(
             id=node["id"], name=node["name"], charts=tuple(c.id for c in chart_list),
             axis_types=tuple(node["axis_types"]), operands=tuple(operands), execution=node["execution"],
             table=table, checks=tuple(checks), aborts=tuple(aborts), request=request, done_when=done_when,
-            status_bits=tuple(sorted(dict(node.get("status_bits", {})).items())),
+            status_bits=tuple(sorted((str(k), bool(v)) for k, v in status_bits.items())),
             description=str(node.get("description", "")), provenance=self.prov(f, base, node),
-            done_provenance=ir.Provenance(str(done["source"]), done.get("interpretation")),
+            done_provenance=done_prov,
             location=self.loc(f, base),
         )
 
-    def tag_type(self, f: _File, node: dict[str, Any]) -> ir.TagType:
+    def tag_type(self, f: _File, node: _Node) -> ir.TagType:
         base: tuple[Any, ...] = ("tag_type",)
-        self.duplicates(f, (*base, "members"), list(node["members"]), "name", "member")
-        members = tuple(
-            ir.TagMember(
-                name=m["name"], type=m["type"], bit=m.get("bit"), description=str(m.get("description", "")),
-                provenance=self.prov(f, (*base, "members", i), m),
-            )
-            for i, m in enumerate(node["members"])
+        member_nodes = node.items("members", "tag_member")
+        self.duplicates(f, (*base, "members"), member_nodes, "name", "member")
+        members = []
+        for i, m in enumerate(member_nodes):
+            bit = m.get("bit")
+            members.append(ir.TagMember(
+                name=m["name"], type=m["type"], bit=int(bit) if bit is not None else None,
+                description=str(m.get("description", "")), provenance=self.prov(f, (*base, "members", i), m),
+            ))
+        internal = tuple(
+            self.variable(f, (*base, "internal", i), v) for i, v in enumerate(node.items("internal", "variable"))
         )
-        internal = tuple(self.variable(f, (*base, "internal", i), v) for i, v in enumerate(node.get("internal", [])))
-        return ir.TagType(name=node["name"], members=members, internal=internal, provenance=self.prov(f, base, node))
+        return ir.TagType(name=node["name"], members=tuple(members), internal=internal, provenance=self.prov(f, base, node))
 
-    def table(self, f: _File, parts: tuple[Any, ...], node: dict[str, Any], tag_type: ir.TagType) -> ir.ExecutionTable:
+    def table(self, f: _File, parts: tuple[Any, ...], node: _Node, tag_type: ir.TagType) -> ir.ExecutionTable:
         names = [m.name for m in tag_type.members] + [v.name for v in tag_type.internal]
         rows = []
-        self.duplicates(f, (*parts, "rows"), list(node["rows"]), "condition", "row for condition")
-        for i, r in enumerate(node["rows"]):
+        row_nodes = node.items("rows", "table_row")
+        self.duplicates(f, (*parts, "rows"), row_nodes, "condition", "row for condition")
+        for i, r in enumerate(row_nodes):
             p = (*parts, "rows", i)
             rows.append(ir.TableRow(
                 condition=r["condition"],
@@ -541,8 +928,9 @@ class _Builder:
                 self.error(f, (*parts, "rows"), f"execution table has no row for {cond!r}")
 
         def block(key: str) -> tuple[Assignment, ...]:
-            self.prov(f, (*parts, key), node[key])
-            return self.actions(f, (*parts, key, "actions"), node[key]["actions"], names, names)
+            b = node.child(key, "table_block")
+            self.prov(f, (*parts, key), b)
+            return self.actions(f, (*parts, key, "actions"), b["actions"], names, names)
 
         return ir.ExecutionTable(
             id=node["id"], rows=tuple(rows), on_execute=block("on_execute"), on_error=block("on_error"),
@@ -552,6 +940,33 @@ class _Builder:
 
 _NEVER = parse_expression("False")
 _EMPTY_TABLE = ir.ExecutionTable("", (), (), (), (), (), ir.Provenance(""))
+
+
+def _other_format(tree: Any) -> bool:
+    """A file of another motionchart format (``motionchart-properties/1``...), not a spec file."""
+    fmt = _Node(tree, "file").get("format") if isinstance(tree, dict) else None
+    return isinstance(fmt, str) and fmt.startswith("motionchart-") and not fmt.startswith("motionchart-spec/")
+
+
+def _cited_interpretations(tree: Any) -> set[str]:
+    out: set[str] = set()
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict):
+            value = node.get("interpretation")
+            if isinstance(value, str):
+                out.add(value)
+            stack.extend(node.values())
+        elif isinstance(node, list):
+            stack.extend(node)
+    return out
+
+
+def _is_number(value: Any, *, integral: bool) -> bool:
+    if isinstance(value, bool):
+        return False
+    return isinstance(value, int) if integral else isinstance(value, (int, float))
 
 
 def _loc_parts(location: ir.Location) -> tuple[Any, ...]:
@@ -593,6 +1008,11 @@ def _closest(name: str, known: set[str]) -> str | None:
     return match[0] if match else None
 
 
+def _hint(name: str, known: Iterable[str]) -> str:
+    match = _closest(str(name), set(known))
+    return f" (did you mean {match!r}?)" if match else ""
+
+
 # --------------------------------------------------------------------------- entry point
 
 
@@ -601,20 +1021,33 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     schema = spec_schema()
     b = _Builder()
     files: list[_File] = []
+    failed_files = 0
     for path in spec_files(paths):
-        if path.suffix == ".json" or path.parent.name == "schema":
+        # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files
+        if path.suffix == ".json" or path.parent.name in ("schema", "systems", "properties"):
             continue
+        before = len(b.errors)
         tree = read_yaml(path, b.errors)
         if tree is None:
-            if not any(d.file == str(path) for d in b.errors):
-                b.errors.append(Diagnostic(str(path), 1, 1, "", "empty file; expected a mapping with `format: motionchart-spec/1`"))
+            if len(b.errors) == before:
+                b.errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+            failed_files += 1
             continue
-        problems = schema_diagnostics(str(path), tree, schema, "a spec file")
-        b.errors.extend(problems)
-        if not problems:
+        if _other_format(tree):
+            # properties, systems... live beside the spec and have their own loaders; an
+            # interpretation they cite still counts as used
+            b.used_interpretations.update(_cited_interpretations(tree))
+            continue
+        b.errors.extend(schema_diagnostics(str(path), tree, schema, "a spec file"))
+        if len(b.errors) == before:
             files.append(_File(str(path), tree))
+        else:
+            failed_files += 1
     if not files and not b.errors:
         b.errors.append(Diagnostic(str(paths[0]) if paths else "spec", 1, 1, "", "no spec files (*.yaml) found"))
+    # When a file could not be read, what it defines is unknown: checks across files
+    # would only repeat its failure (every use of its charts, codes, interpretations).
+    complete = failed_files == 0
 
     interpretations: list[ir.Interpretation] = []
     interp_where: dict[str, tuple[_File, tuple[Any, ...]]] = {}
@@ -622,8 +1055,8 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     extended: list[ir.ExtendedError] = []
     tag_type: ir.TagType | None = None
     for f in files:
-        t = f.tree
-        for i, n in enumerate(t.get("interpretations", [])):
+        t = f.top
+        for i, n in enumerate(t.items("interpretations", "interpretation")):
             if n["id"] in interp_where:
                 b.error(f, ("interpretations", i, "id"), f"duplicate interpretation {n['id']!r}")
                 continue
@@ -633,26 +1066,27 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 confidence=ir.Confidence(n["confidence"]), evidence=tuple(n["evidence"]),
             ))
         codes_seen: set[int] = set()
-        for i, n in enumerate(t.get("errors", [])):
-            if n["code"] in codes_seen:
-                b.error(f, ("errors", i, "code"), f"duplicate error code {n['code']}")
-            codes_seen.add(n["code"])
-            errors.append(ir.ErrorCode(n["code"], n["name"], n["meaning"], ir.Confidence(n["confidence"]), b.prov(f, ("errors", i), n)))
-        for i, n in enumerate(t.get("extended_errors", [])):
+        for i, n in enumerate(t.items("errors", "error")):
+            code = int(n["code"])
+            if code in codes_seen:
+                b.error(f, ("errors", i, "code"), f"duplicate error code {code}")
+            codes_seen.add(code)
+            errors.append(ir.ErrorCode(code, n["name"], n["meaning"], ir.Confidence(n["confidence"]), b.prov(f, ("errors", i), n)))
+        for i, n in enumerate(t.items("extended_errors", "extended_error")):
             extended.append(ir.ExtendedError(
-                n["instruction"], n["err"], n["exerr"], n["name"], n["meaning"], ir.Confidence(n["confidence"]),
+                n["instruction"], int(n["err"]), int(n["exerr"]), n["name"], n["meaning"], ir.Confidence(n["confidence"]),
                 b.prov(f, ("extended_errors", i), n),
             ))
         if "tag_type" in t:
             if tag_type is not None:
                 b.error(f, ("tag_type",), "the MOTION_INSTRUCTION tag type is defined twice")
-            tag_type = b.tag_type(f, t["tag_type"])
+            tag_type = b.tag_type(f, t.child("tag_type", "tag_type"))
 
     tables: dict[str, ir.ExecutionTable] = {}
-    if tag_type is None and files:
+    if tag_type is None and files and complete:
         b.errors.append(Diagnostic(files[0].name, 1, 1, "", "no file defines `tag_type` (the MOTION_INSTRUCTION data type)"))
     for f in files:
-        for i, n in enumerate(f.tree.get("execution_tables", [])):
+        for i, n in enumerate(f.top.items("execution_tables", "execution_table")):
             if n["id"] in tables:
                 b.error(f, ("execution_tables", i, "id"), f"duplicate execution table {n['id']!r}")
             elif tag_type is not None:
@@ -660,51 +1094,55 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
 
     charts: dict[str, ir.Chart] = {}
     for f in files:
-        if "chart" in f.tree:
-            cid = f.tree["chart"]["id"]
-            if cid in charts:
-                b.error(f, ("chart", "id"), f"duplicate chart id {cid!r}")
+        if "chart" in f.top:
+            c = f.top.child("chart", "chart")
+            if c["id"] in charts:
+                b.error(f, ("chart", "id"), f"duplicate chart id {c['id']!r}")
                 continue
-            chart = b.chart(f, f.tree["chart"])
-            if chart is not None:
-                charts[cid] = chart
+            charts[c["id"]] = b.chart(f, c)
 
     instructions: dict[str, ir.Instruction] = {}
+    instruction_files: list[tuple[_File, str]] = []
     for f in files:
-        if "instruction" in f.tree:
-            iid = f.tree["instruction"]["id"]
+        if "instruction" in f.top:
+            node = f.top.child("instruction", "instruction")
+            iid = node["id"]
             if iid in instructions:
                 b.error(f, ("instruction", "id"), f"duplicate instruction {iid!r}")
                 continue
-            instructions[iid] = b.instruction(f, f.tree["instruction"], charts, tables, tag_type)
+            if not complete and (
+                any(cid not in charts for cid in node["charts"]) or node["execution_table"] not in tables
+            ):
+                continue  # what it refers to may be in the file that failed
+            instructions[iid] = b.instruction(f, node, charts, tables)
+            instruction_files.append((f, iid))
 
     # cross-file references: error codes and interpretations
     codes = {e.code for e in errors}
     ext_pairs = {(x.instruction, x.err, x.exerr) for x in extended}
-    for f in files:
-        if "instruction" not in f.tree:
-            continue
-        ins = instructions.get(f.tree["instruction"]["id"])
-        if ins is None:
-            continue
+    for f, iid in instruction_files:
+        ins = instructions[iid]
         for kind, items in (("checks", ins.checks), ("aborts", ins.aborts)):
             for i, ch in enumerate(items):
                 p = ("instruction", kind, i)
-                if codes and ch.err not in codes:
+                if complete and codes and ch.err not in codes:
                     b.error(f, (*p, "err"), f"error code {ch.err} is not in the error catalog (errors.yaml)")
-                if ch.exerr and (ins.id, ch.err, ch.exerr) not in ext_pairs:
+                if complete and ch.exerr and (ins.id, ch.err, ch.exerr) not in ext_pairs:
                     b.error(f, (*p, "exerr"), f"extended error {ch.err}/{ch.exerr} of {ins.id} is not in extended_errors")
-    for f in files:
-        for i, n in enumerate(f.tree.get("extended_errors", [])):
-            if n["instruction"] not in instructions and instructions:
-                b.error(f, ("extended_errors", i, "instruction"), f"unknown instruction {n['instruction']!r}")
+    if complete:
+        for f in files:
+            for i, n in enumerate(f.top.items("extended_errors", "extended_error")):
+                if n["instruction"] not in instructions and instructions:
+                    b.error(f, ("extended_errors", i, "instruction"), (
+                        f"unknown instruction {n['instruction']!r}; instructions: {', '.join(sorted(instructions))}"))
     for interp_id, f, parts in b.interp_refs:
         b.used_interpretations.add(interp_id)
-        if interp_id not in interp_where:
+        if interp_id not in interp_where and complete:
             b.error(f, parts, f"unknown interpretation {interp_id!r}; add it to interpretations.yaml")
-    for interp_id, (f, parts) in interp_where.items():
-        if interp_id not in b.used_interpretations:
-            b.error(f, parts, f"interpretation {interp_id} is not used by any spec element")
+    if complete:
+        for interp_id, (f, parts) in interp_where.items():
+            if interp_id not in b.used_interpretations:
+                b.error(f, (*parts, "id"), f"interpretation {interp_id} is not used by any spec element")
 
     if b.errors:
         raise SpecError(b.errors)

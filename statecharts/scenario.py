@@ -21,8 +21,9 @@ from typing import Any
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics
-from statecharts.scan import TAG_FIELDS, EnvironmentEvent, ScanInputs, ScanRecord, System
+from statecharts.expr import EvalError
+from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics, tree_diagnostics
+from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
 
@@ -114,18 +115,39 @@ def scenario_schema() -> dict[str, Any]:
 
 
 def _read(path: Path, errors: list[Diagnostic]) -> Any:
-    if path.suffix == ".json":
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            errors.append(Diagnostic(str(path), 1, 1, "", f"cannot read scenario: {exc}"))
-            return None
-        try:
-            return json.loads(text)
-        except json.JSONDecodeError as exc:
-            errors.append(Diagnostic(str(path), exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
-            return None
-    return read_yaml(path, errors, what="scenario")
+    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML.
+
+    JSON is checked with the json module (its error positions are exact), then read
+    again with the YAML parser, which accepts JSON, to get line numbers for the later
+    diagnostics; should that fail, the JSON tree is used without positions.
+    """
+    if path.suffix != ".json":
+        return read_yaml(path, errors, what="scenario")
+    name = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        errors.append(Diagnostic(name, 1, 1, "", f"cannot read scenario: {exc.strerror or exc}"))
+        return None
+    except UnicodeDecodeError as exc:
+        errors.append(Diagnostic(name, 1, 1, "", f"scenario is not UTF-8 text ({exc.reason} at byte {exc.start})"))
+        return None
+    try:
+        tree = json.loads(text)
+    except json.JSONDecodeError as exc:
+        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
+        return None
+    except RecursionError:
+        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
+        return None
+    problems, fatal = tree_diagnostics(name, tree, what="scenario")
+    if problems:
+        errors.extend(problems)
+        return None if fatal else tree
+    positioned = read_yaml(path, [], what="scenario")
+    if positioned is not None and _plain(positioned) == tree:
+        return positioned
+    return tree
 
 
 def _coerce_operand(operand: ir.Operand, value: object) -> object:
@@ -146,9 +168,9 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         if not errors:
             errors.append(Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
         raise ScenarioError(errors)
-    problems = schema_diagnostics(name, tree, scenario_schema(), "a scenario")
-    if problems:
-        raise ScenarioError(problems)
+    errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
+    if errors:
+        raise ScenarioError(errors)
     doc = _plain(tree)
 
     def err(parts: tuple[Any, ...], message: str) -> None:
@@ -159,26 +181,31 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     axis_types = sorted({t for c in spec.charts for t in c.axis_types})
     axes: list[AxisSetup] = []
     charts: dict[str, ir.Chart] = {}
+    untyped: set[str] = set()  # axes of an unknown type: their uses are not errors of their own
     for axis_name, a in setup["axes"].items():
         p = ("setup", "axes", axis_name)
         try:
             chart = spec.chart_for_axis_type(a["type"])
         except KeyError:
             err((*p, "type"), f"unknown axis type {a['type']!r}; expected one of: {', '.join(axis_types)}")
+            untyped.add(axis_name)
             continue
         charts[axis_name] = chart
         state = a.get("state")
-        if state is not None and state not in {s.id for s in chart.states}:
-            err((*p, "state"), f"chart {chart.id} has no state {state!r}; states: {', '.join(s.id for s in chart.states)}")
+        startable = [s.id for s in chart.states if s.kind not in (ir.StateKind.HISTORY, ir.StateKind.PARALLEL)]
+        if state is not None and state not in startable:
+            what = "no state" if state not in {s.id for s in chart.states} else "a history or parallel state"
+            err((*p, "state"), f"chart {chart.id} has {what} {state!r}; an axis can start in: {', '.join(startable)}")
         variables = dict(a.get("variables", {}))
         for vname, value in variables.items():
             try:
                 var = chart.variable(vname)
             except KeyError:
-                err((*p, "variables", vname), f"chart {chart.id} has no variable {vname!r}")
+                err((*p, "variables", vname), f"chart {chart.id} has no variable {vname!r}; variables: {', '.join(v.name for v in chart.variables)}")
                 continue
-            if var.domain is not None and value not in var.domain:
-                err((*p, "variables", vname), f"{value!r} is not in the domain of {vname}: {list(var.domain)!r}")
+            problem = _value_problem(var.type, var.domain, value)
+            if problem:
+                err((*p, "variables", vname), f"{vname}: {problem}")
         if "AxisType" in {v.name for v in chart.variables}:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
@@ -196,6 +223,9 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             continue
         if entry["axis"] not in setup["axes"]:
             err((*p, "axis"), f"unknown axis {entry['axis']!r}; axes: {', '.join(setup['axes'])}")
+        elif entry["axis"] in charts and charts[entry["axis"]].id not in ins.charts:
+            err((*p, "axis"), (f"{ins.id} is defined for charts {', '.join(ins.charts)}; axis {entry['axis']!r} "
+                               f"follows chart {charts[entry['axis']].id}"))
         tag_ins[entry["tag"]] = ins
         ops = _operands(ins, entry.get("operands", {}), (*p, "operands"), err)
         program.append(ProgramEntry(entry["tag"], ins.id, entry["axis"], tuple(sorted(ops.items()))))
@@ -216,7 +246,8 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         for j, e in enumerate(s.get("events", [])):
             chart = charts.get(e["axis"])
             if chart is None:
-                err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}")
+                if e["axis"] not in untyped:
+                    err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}; axes: {', '.join(setup['axes'])}")
                 continue
             env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
             if e["event"] not in env_events:
@@ -225,12 +256,14 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
             if target in tag_ins:
-                allowed = list(TAG_FIELDS)
+                allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
             elif target in charts:
                 c = charts[target]
                 allowed = ["state", c.state_attribute] + [v.name for v in c.variables]
             else:
-                err((*p, "expect", target), f"unknown tag or axis {target!r}")
+                if target not in untyped:
+                    err((*p, "expect", target), (f"unknown tag or axis {target!r}; tags: {', '.join(tag_ins) or '(none)'}; "
+                                                 f"axes: {', '.join(setup['axes'])}"))
                 continue
             for fname, value in fields.items():
                 if fname not in allowed:
@@ -256,6 +289,19 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     )
 
 
+def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
+    """Why ``value`` cannot be given to a variable of ``vtype``, or None."""
+    if vtype == "bool":
+        return None if isinstance(value, bool) else f"expected true or false, got {value!r}"
+    if vtype == "int" and (isinstance(value, bool) or not isinstance(value, int)):
+        return f"expected an integer, got {value!r}"
+    if vtype == "real" and (isinstance(value, bool) or not isinstance(value, (int, float))):
+        return f"expected a number, got {value!r}"
+    if domain is not None and value not in domain:
+        return f"{value!r} is not in the domain {list(domain)!r}"
+    return None
+
+
 def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any, ...], err: Any) -> dict[str, object]:
     known = {o.name: o for o in ins.operands if o.type not in ("axis", "tag")}
     out: dict[str, object] = {}
@@ -263,7 +309,17 @@ def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any
         if oname not in known:
             err((*parts, oname), f"{ins.id} has no operand {oname!r}; operands: {', '.join(known) or '(none)'}")
             continue
-        out[oname] = _coerce_operand(known[oname], value)
+        operand = known[oname]
+        value = _coerce_operand(operand, value)
+        # any number is allowed (out-of-range values are how checks are exercised); text
+        # only when it names a value ("enter as text" names were turned into numbers above)
+        textual = isinstance(value, str) and operand.domain is not None and value in operand.domain
+        if not textual and (isinstance(value, bool) or not isinstance(value, (int, float))):
+            names = [k for k, _ in operand.text_values]
+            extra = f" or one of: {', '.join(names)}" if names else ""
+            err((*parts, oname), f"operand {oname} of {ins.id}: expected a number{extra}, got {value!r}")
+            continue
+        out[oname] = value
     return out
 
 
@@ -289,14 +345,24 @@ def _same(expected: object, actual: object) -> bool:
 
 
 def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
-    system = build_system(scenario, spec)
+    """Run every step; an expression that cannot be evaluated on the scenario's values
+    (e.g. a division by zero) is a ScenarioError naming the step."""
+    try:
+        system = build_system(scenario, spec)
+    except (EvalError, ValueError) as exc:
+        raise ScenarioError([Diagnostic(scenario.file, 1, 1, "setup", f"cannot set up the scenario: {exc}")]) from None
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
     for step in scenario.steps:
         for k in range(step.scans):
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
-            record = system.scan(inputs)
+            try:
+                record = system.scan(inputs)
+            except EvalError as exc:
+                label = f"step {step.index + 1}" + (f" ({step.name})" if step.name else "")
+                raise ScenarioError([Diagnostic(scenario.file, step.line, 1, f"steps[{step.index}]", (
+                    f"{label}, scan {system.index}: the spec cannot be evaluated on these values: {exc}"))]) from None
             changes = tuple(
                 (obj, fld, before.get(obj, {}).get(fld), val)
                 for obj, fields in record.observations.items()

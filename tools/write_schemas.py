@@ -263,11 +263,88 @@ scenario = {
 }
 
 
+SYSTEM_CONFIG = {
+    "type": "object", "additionalProperties": False, "required": ["name"],
+    "properties": {
+        "name": NAME_KEY, "description": {"type": "string"},
+        "variables": {"type": "object", "additionalProperties": SCALAR},
+    },
+}
+system = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "https://motionchart.invalid/schema/system-1.json",
+    "title": "motionchart system for the model checker, format 1",
+    "description": "Axes, instruction calls, operand domains, environment and abstractions that `motionchart check` explores.",
+    "type": "object", "additionalProperties": False,
+    "required": ["format", "name", "axes"],
+    "properties": {
+        "format": {"const": "motionchart-system/1"},
+        "name": NAME_KEY, "description": {"type": "string"}, "source": {"type": "string"},
+        "scan_ms": {"type": "integer", "minimum": 1},
+        "coarse_update_ms": {"type": "integer", "minimum": 1},
+        "axes": {"type": "array", "minItems": 1, "items": {
+            "type": "object", "additionalProperties": False, "required": ["name", "type"],
+            "properties": {
+                "name": NAME_KEY, "type": {"type": "string"},
+                "count": {"type": "integer", "minimum": 1, "maximum": 64},
+                "state": {"type": "string"},
+                "variables": {"type": "object", "additionalProperties": SCALAR},
+                "configurations": {"type": "array", "minItems": 1, "items": SYSTEM_CONFIG},
+                "program": {"type": "array", "items": ID},
+            }}},
+        "operands": {"type": "object", "additionalProperties": {
+            "type": "object", "additionalProperties": {"type": "array", "items": SCALAR, "minItems": 1}}},
+        "environment": {"type": "array", "items": ID},
+        "prescan": {"type": "boolean"},
+        "max_live_calls": {"type": "integer", "minimum": 1},
+        "abstraction": {
+            "type": "object", "additionalProperties": False,
+            "properties": {
+                "collapse": {"type": "array", "items": ID},
+                "symmetry": {"type": "boolean"},
+                "retire_idle_tags": {"type": "boolean"},
+            }},
+    },
+}
+PROPERTY = {
+    "type": "object", "additionalProperties": False, "required": ["name", "kind", "source"],
+    "properties": {
+        "name": ID,
+        "kind": {"enum": ["invariant", "reachable", "deadlock_free", "response", "cover"]},
+        "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
+        "scope": {"enum": ["axis", "tag"]},
+        "chart": ID, "instruction": ID,
+        "where": EXPR, "holds": EXPR, "goal": EXPR,
+        "trigger": EXPR, "response": EXPR, "unless": EXPR,
+        "within": {"type": "integer", "minimum": 1, "maximum": 1000},
+        "cover": {"enum": ["states", "transitions", "error_codes", "cells", "values"]},
+        "variable": ID,
+        "unreachable": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False, "required": ["item", "reason"],
+            "properties": {"item": {"type": "string", "minLength": 1}, "reason": {"type": "string", "minLength": 1},
+                           "source": {"type": "string"}}}},
+    },
+}
+properties = {
+    "$schema": "https://json-schema.org/draft/2020-12/schema",
+    "$id": "https://motionchart.invalid/schema/properties-1.json",
+    "title": "motionchart properties for the model checker, format 1",
+    "description": "Invariants, reachability goals, deadlock freedom, bounded response and coverage goals, written in the spec expression language.",
+    "type": "object", "additionalProperties": False,
+    "required": ["format", "properties"],
+    "properties": {
+        "format": {"const": "motionchart-properties/1"},
+        "properties": {"type": "array", "items": PROPERTY},
+    },
+}
+
+
 def render(doc: dict) -> str:
     return json.dumps(doc, indent=2, sort_keys=True) + "\n"
 
 
-SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario}
+SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
+           "system.schema.json": system, "properties.schema.json": properties}
 
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"

@@ -1,0 +1,143 @@
+"""``motionchart check``: explore a system exhaustively and report verdicts, coverage, statistics.
+
+Pipeline position: the CLI layer over :mod:`checker.system`, :mod:`checker.model`,
+:mod:`checker.search` and :mod:`checker.report`.  :func:`register` adds the subcommand to
+the ``motionchart`` parser; :func:`dispatch` runs it.  Exit codes: 0 every property
+holds, 1 a property is violated (or a user file is wrong), 2 usage error, 3 the search
+was incomplete (state or time limit) and nothing was violated.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import TextIO
+
+from statecharts.diagnostics import InputError
+
+EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+DEFAULT_SYSTEM = "noncip"
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
+def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
+    p = subparsers.add_parser(
+        "check", help="model-check a system: properties, counterexamples, coverage",
+        description="Explore every reachable state of a system (spec/systems/*.yaml) and check the "
+                    "properties (spec/properties/*.yaml). Exit 0: all hold; 1: a violation; 3: incomplete.")
+    p.add_argument("--system", default=DEFAULT_SYSTEM, metavar="NAME",
+                   help=f"a bundled system name or a system file (default: {DEFAULT_SYSTEM}; --list-systems lists them)")
+    p.add_argument("--list-systems", action="store_true", help="list the bundled systems and exit")
+    p.add_argument("--axes", type=_positive_int, metavar="N", help="use N axes in every axis group of the system")
+    p.add_argument("--max-states", type=_positive_int, metavar="N", help="stop (incomplete) after N states")
+    p.add_argument("--max-seconds", type=_positive_float, metavar="S", help="stop (incomplete) after S seconds")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--counterexamples", metavar="DIR", help="write each counterexample as a scenario file in DIR")
+    p.add_argument("--graphml", metavar="FILE", help="write the state graph as GraphML (networkx)")
+    p.add_argument("--properties", action="append", metavar="PATH",
+                   help="property files or directories (default: the bundled spec/properties)")
+    p.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
+    p.add_argument("--no-symmetry", action="store_true", help="explore without symmetry reduction")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    return p
+
+
+def dispatch(args: argparse.Namespace) -> int | None:
+    """Run ``check`` if it is the command; None for any other command."""
+    if getattr(args, "command", None) != "check":
+        return None
+    return run(args, sys.stdout)
+
+
+def run(args: argparse.Namespace, out: TextIO) -> int:
+    from checker.model import Model, ModelError
+    from checker.properties import load_properties
+    from checker.report import build_report, text
+    from checker.search import explore
+    from checker.system import bundled_systems, load_system
+    from statecharts.loader import load_spec
+
+    for opt in ("properties", "spec"):
+        for p in getattr(args, opt) or []:
+            if not p or not Path(p).exists():
+                print(f"motionchart check: no such file or directory: {p!r}", file=sys.stderr)
+                return EXIT_USAGE
+    systems = bundled_systems()
+    if args.list_systems:
+        for name, path in systems.items():
+            out.write(f"{name}\t{path}\n")
+        return EXIT_OK
+    if args.system in systems:
+        system_path = systems[args.system]
+    elif Path(args.system).is_file():
+        system_path = Path(args.system)
+    else:
+        print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
+              "(or give a system file)", file=sys.stderr)
+        return EXIT_USAGE
+    try:
+        spec = load_spec(args.spec)
+        sysdef = load_system(system_path, spec)
+        if args.axes is not None:
+            sysdef = sysdef.scaled(args.axes)
+        props = load_properties(spec, args.properties)
+        model = Model(spec, sysdef, props, symmetry=False if args.no_symmetry else None)
+    except (InputError, ModelError) as exc:
+        for d in exc.diagnostics:
+            print(d, file=sys.stderr)
+        return EXIT_VIOLATED
+    progress = False if (args.quiet or args.json) else None
+    result = explore(model, max_states=args.max_states, max_seconds=args.max_seconds,
+                     keep_graph=args.graphml is not None, progress=progress)
+    report = build_report(result, counterexamples=Path(args.counterexamples) if args.counterexamples else None,
+                          graphml=Path(args.graphml) if args.graphml else None)
+    if args.json:
+        json.dump(report.as_dict(), out, indent=2, sort_keys=True, default=str)
+        out.write("\n")
+    else:
+        out.write(text(report))
+    return report.exit_code
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Stand-alone entry (``python -m checker.check_cli``), for use before the main CLI wires ``check``."""
+    class _P(argparse.ArgumentParser):
+        def error(self, message: str) -> None:  # type: ignore[override]
+            self.print_usage(sys.stderr)
+            print(f"{self.prog}: error: {message}", file=sys.stderr)
+            raise SystemExit(EXIT_USAGE)
+
+    parser = _P(prog="motionchart")
+    sub = parser.add_subparsers(dest="command", parser_class=_P)
+    register(sub)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    code = dispatch(args)
+    return EXIT_USAGE if code is None else code
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

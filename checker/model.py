@@ -1,0 +1,640 @@
+"""The transition system the search explores: states as flat tuples, inputs as choices, one scan per step.
+
+Pipeline position: IR + :mod:`checker.system` + :mod:`checker.properties` -> **checker.model**
+-> :mod:`checker.search`.
+
+A :class:`Model` owns one :class:`statecharts.scan.System` whose axes are
+:class:`checker.compile.FastAxis` interpreters.  A step is: :meth:`Model.load` a state,
+run :meth:`System.advance` with the inputs of one :class:`Choice`, evaluate the
+properties on the concrete successor, and :meth:`Model.extract` the successor's
+abstract state.  The scan rules are therefore exactly the engine's (one module).
+
+The abstract state is a flat tuple: the phase of the coarse-update clock, then one block
+per axis -- its configuration, its chart variables, its queued requests and held
+environment events, and for each of its tags the MOTION_INSTRUCTION members, the rung,
+the operands and the response monitors.  Blocks of interchangeable axes have the same
+layout, which lets the search canonicalise states by sorting them (symmetry reduction).
+
+The abstractions (``docs/checker.md``; each is exact for what properties and control
+can observe, and ``tests/test_checker_soundness.py`` checks that every engine run maps
+onto a path of this model):
+
+* program: one input change per scan (:class:`Choice`): raise one tag's rung with one
+  choice of operand values, drop one tag's rung, one environment event on one axis, a
+  prescan pass, or nothing; optionally at most ``max_live_calls`` calls live per axis;
+* collapse: chart variables no guard, check, completion condition, abort, request or
+  property depends on (the cone of influence, computed here) are left out of the state;
+* dead operands: the operands of a tag whose rung is low and that is neither pending
+  nor queued are reset to their defaults (the next execution needs a rise, and a rise
+  overwrites them; a rung held through a prescan re-executes with the old ones);
+* idle tags retire: a tag whose rung is low, that is neither pending nor queued and
+  whose next rise executes is stored with its initial values.  This is verified per
+  execution table by enumeration (:func:`retirement_check`); properties of a tag are
+  checked over each call's lifetime, from the rise until the tag is idle again.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+from checker.compile import FastAxis
+from checker.properties import Property
+from checker.system import SystemDef, initial_assignments, operand_choices
+from statecharts import ir
+from statecharts.diagnostics import Diagnostic
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System, TagInstance
+
+Flat = tuple[object, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Choice:
+    """One input change for one scan (the most general program's alphabet)."""
+
+    index: int
+    kind: str  # "raise" | "drop" | "event" | "prescan" | "nothing"
+    tag: str | None
+    axis: str | None
+    event: str | None
+    operands: tuple[tuple[str, object], ...]
+    inputs: ScanInputs = field(compare=False, repr=False)
+
+    def label(self) -> str:
+        if self.kind == "raise":
+            ops = ", ".join(f"{k}={v}" for k, v in self.operands)
+            return f"{self.tag} rung up" + (f" ({ops})" if ops else "")
+        if self.kind == "drop":
+            return f"{self.tag} rung down"
+        if self.kind == "event":
+            return f"{self.event} on {self.axis}"
+        return "prescan" if self.kind == "prescan" else "scan"
+
+
+@dataclass(frozen=True, slots=True)
+class StepFacts:
+    """What one step did, for coverage: transitions fired, calls executed, results."""
+
+    fired: tuple[tuple[str, str], ...]  # (chart, transition id)
+    executed: tuple[tuple[str, str], ...]  # (instruction, axis leaf state)
+    errors: tuple[tuple[str, int, int], ...]  # (instruction, ERR, EXERR)
+
+
+class ModelError(ValueError):
+    """The system cannot be checked as defined (e.g. a collapse that would be unsound)."""
+
+    def __init__(self, diagnostics: Sequence[Diagnostic]) -> None:
+        self.diagnostics = tuple(diagnostics)
+        super().__init__("\n".join(str(d) for d in diagnostics))
+
+
+# --------------------------------------------------------------------------- analyses
+
+
+def relevant_variables(spec: ir.Spec, chart: ir.Chart, instructions: Iterable[ir.Instruction],
+                       properties: Iterable[Property]) -> frozenset[str]:
+    """Cone of influence: chart variables that guards, checks, completion conditions,
+    aborts, request actions or properties read, closed under the actions that assign them."""
+    names = {v.name for v in chart.variables}
+    need: set[str] = set()
+
+    def axis_reads(expr_names: Iterable[str]) -> set[str]:
+        return {n[5:] for n in expr_names if n.startswith("axis.") and n[5:] in names}
+
+    for t in chart.transitions:
+        if t.guard is not None:
+            need |= t.guard.names & names
+    writers: list[tuple[str, frozenset[str]]] = []
+    for s in chart.states:
+        writers += [(a.target, a.value.names & names) for a in (*s.entry, *s.exit)]
+    for t in chart.transitions:
+        writers += [(a.target, a.value.names & names) for a in t.actions]
+    for e in chart.events:
+        writers += [(a.target, a.value.names & names) for a in e.actions]
+    for ins in instructions:
+        for c in (*ins.checks, *ins.aborts):
+            need |= axis_reads(c.fails_when.names)
+        if ins.done_when is not None:
+            need |= axis_reads(ins.done_when.names)
+        if ins.request is not None:
+            for a in ins.request.actions:
+                writers.append((a.target[5:], frozenset(axis_reads(a.value.names))))
+    for p in properties:
+        if p.scope == "axis" or p.kind == "cover":
+            need |= p.names() & names
+        need |= axis_reads(p.names())
+    changed = True
+    while changed:  # close under "read by an action that assigns a needed variable"
+        changed = False
+        for target, reads in writers:
+            if target in need and not reads <= need:
+                need |= reads
+                changed = True
+    return frozenset(need)
+
+
+def _tag_field_domains(spec: ir.Spec, ins: ir.Instruction) -> list[tuple[str, tuple[object, ...]]]:
+    out: list[tuple[str, tuple[object, ...]]] = []
+    for m in spec.tag_type.members:
+        if m.type == "BOOL":
+            out.append((m.name, (False, True)))
+        else:
+            codes = {0, 1} | {c.err for c in (*ins.checks, *ins.aborts)} | {c.exerr for c in (*ins.checks, *ins.aborts)}
+            out.append((m.name, tuple(sorted(codes))))
+    for v in spec.tag_type.internal:
+        out.append((v.name, tuple(v.domain) if v.domain is not None else (v.initial,)))
+    return out
+
+
+def retirement_check(spec: ir.Spec, ins: ir.Instruction) -> str | None:
+    """None when an idle tag of ``ins`` may be stored with its initial values; else why not.
+
+    Idle: not pending, and the rung-true row would execute.  By enumeration over the
+    tag's members (BOOL both values, integers 0, 1 and the instruction's codes): from
+    every idle valuation and from the initial one, the rung-false and prescan rows reach
+    states that are both idle or else equal, and a rise (the rung-true row and, when it
+    executes, ``on_execute``) reaches equal states.
+    """
+    table = ins.table
+    fields = _tag_field_domains(spec, ins)
+    probe = TagInstance("probe", ins, spec.tag_type, "probe")
+    initial = dict(probe.values)
+    rise_row = table.row("rung_true")
+
+    def idle(vals: Mapping[str, object]) -> bool:
+        if vals.get("pending"):
+            return False
+        return rise_row is None or rise_row.guard is None or bool(rise_row.guard(vals))
+
+    def run_row(cond: str, vals: dict[str, object]) -> tuple[dict[str, object], bool]:
+        out = dict(vals)
+        row = table.row(cond)
+        if row is None or (row.guard is not None and not row.guard(out)):
+            return out, False
+        for a in row.actions:
+            a.apply(out)
+        if row.execute:
+            for a in table.on_execute:
+                a.apply(out)
+        return out, row.execute
+
+    if not idle(initial):
+        return "a fresh tag's rise would not execute"
+    for combo in itertools.product(*(d for _n, d in fields)):
+        vals = dict(zip((n for n, _d in fields), combo))
+        if not idle(vals):
+            continue
+        for cond in ("rung_false", "prescan"):
+            a, ea = run_row(cond, vals)
+            b, eb = run_row(cond, initial)
+            if ea or eb:
+                return f"the {cond} row executes the instruction"
+            if idle(a) != idle(b) or (not idle(a) and a != b):
+                return f"the {cond} row depends on the values an idle tag keeps ({sorted(vals.items())})"
+        a, _ = run_row("rung_true", vals)
+        b, _ = run_row("rung_true", initial)
+        if a != b:
+            return f"a rise depends on the values an idle tag keeps ({sorted(vals.items())})"
+    return None
+
+
+# --------------------------------------------------------------------------- the model
+
+
+class _TagSlot:
+    """Per-tag constants the model uses in its inner loops."""
+
+    __slots__ = ("tag", "axis_index", "local", "fields", "initial", "op_names", "default_ops", "retire",
+                 "rise_guard", "monitors", "inv", "reach", "reads_axis", "ins", "retired")
+
+    def __init__(self) -> None:
+        self.monitors: tuple[Property, ...] = ()
+        self.inv: tuple[Property, ...] = ()
+        self.reach: tuple[Property, ...] = ()
+
+
+class Model:
+    """The checker's transition system for one system definition and a set of properties."""
+
+    def __init__(
+        self,
+        spec: ir.Spec,
+        sysdef: SystemDef,
+        properties: Sequence[Property] = (),
+        *,
+        axis_backend: Callable[..., object] = FastAxis,
+        symmetry: bool | None = None,
+    ) -> None:
+        self.spec = spec
+        self.sysdef = sysdef
+        self.properties = tuple(properties)
+        self.axis_backend = axis_backend
+        self.axis_defs = sysdef.axes()
+        self.program = sysdef.program()
+        self.params = {"scan_ms": sysdef.scan_ms, "coarse_update_ms": sysdef.coarse_update_ms}
+        self.assignments = initial_assignments(sysdef)
+        self.system = self.build_system(self.assignments[0])
+        self.spu = self.system.scans_per_update
+        self.axes = list(self.system.axes.values())
+        self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
+        self.notes: list[str] = []
+
+        # cone of influence and the collapse abstraction
+        problems: list[Diagnostic] = []
+        self.collapse_index: dict[str, dict[int, object]] = {}
+        for cid, chart in self.charts.items():
+            instructions = [spec.instruction(m) for _a, g in self.axis_defs if g.chart == cid for m in g.program]
+            relevant = relevant_variables(spec, chart, instructions, self.properties)
+            idx: dict[int, object] = {}
+            for name in sysdef.collapse:
+                if name not in {v.name for v in chart.variables}:
+                    continue
+                if name in relevant:
+                    problems.append(Diagnostic(sysdef.file, 1, 1, "abstraction.collapse", (
+                        f"cannot collapse {name}: a guard, check, completion condition, request or property "
+                        f"of chart {cid} depends on it")))
+                    continue
+                pos = [v.name for v in chart.variables].index(name)
+                idx[pos] = chart.variables[pos].initial
+            self.collapse_index[cid] = idx
+        if problems:
+            raise ModelError(problems)
+
+        # retirement of idle tags, verified per instruction
+        retire_ok: dict[str, bool] = {}
+        for ins in spec.instructions:
+            why = retirement_check(spec, ins) if sysdef.retire_idle_tags else "disabled in the system"
+            retire_ok[ins.id] = why is None
+            if why is not None and sysdef.retire_idle_tags and any(m == ins.id for _t, m, _a in self.program):
+                self.notes.append(f"idle {ins.id} tags are kept exactly: {why}")
+
+        # per-tag slots
+        axis_index = {name: i for i, (name, _g) in enumerate(self.axis_defs)}
+        self.tags: list[TagInstance] = list(self.system.tags.values())
+        self.slots: list[_TagSlot] = []
+        self.tags_of_axis: list[list[int]] = [[] for _ in self.axis_defs]
+        for ti, tag in enumerate(self.tags):
+            s = _TagSlot()
+            s.tag = tag
+            s.ins = tag.instruction
+            s.axis_index = axis_index[tag.axis]
+            s.local = len(self.tags_of_axis[s.axis_index])
+            self.tags_of_axis[s.axis_index].append(ti)
+            s.fields = tuple(tag.values)
+            s.initial = tuple(tag.values.values())
+            s.op_names = tuple(tag.operands)
+            s.default_ops = tuple(tag.operands.values())
+            s.retire = retire_ok[tag.instruction.id]
+            row = tag.instruction.table.row("rung_true")
+            s.rise_guard = row.guard.fn if row is not None and row.guard is not None else None
+            chart = self.charts[self.axis_defs[s.axis_index][1].chart]
+            tag_props = [p for p in self.properties if p.scope == "tag" and p.applies_to_tag(tag.instruction, chart)]
+            s.monitors = tuple(p for p in tag_props if p.kind == "response")
+            s.inv = tuple(p for p in tag_props if p.kind == "invariant")
+            s.reach = tuple(p for p in tag_props if p.kind == "reachable")
+            s.reads_axis = any(n.startswith("axis.") for p in tag_props for n in p.names())
+            self.slots.append(s)
+        self.queue_local = {tag.name: self.slots[ti].local for ti, tag in enumerate(self.tags)}
+        self.tag_axis = {tag.name: self.slots[ti].axis_index for ti, tag in enumerate(self.tags)}
+        self.axis_props: list[tuple[tuple[Property, ...], tuple[Property, ...]]] = []
+        for _name, g in self.axis_defs:
+            chart = self.charts[g.chart]
+            ps = [p for p in self.properties if p.scope == "axis" and p.applies_to_axis(chart)]
+            self.axis_props.append((tuple(p for p in ps if p.kind == "invariant"),
+                                    tuple(p for p in ps if p.kind == "reachable")))
+
+        for s in self.slots:
+            s.retired = (s.initial, False, s.default_ops, tuple(0 for _ in s.monitors))
+        # layout: [phase] + per axis block [axis part, tag parts...]
+        self.block_start: list[int] = []
+        self.block_len: list[int] = []
+        pos = 1
+        for ai in range(len(self.axis_defs)):
+            n = 1 + len(self.tags_of_axis[ai])
+            self.block_start.append(pos)
+            self.block_len.append(n)
+            pos += n
+        self.width = pos
+        use_symmetry = sysdef.symmetry if symmetry is None else symmetry
+        self.symmetric_groups: list[list[int]] = []
+        if use_symmetry:
+            for g in sysdef.groups:
+                members = [i for i, (_n, gg) in enumerate(self.axis_defs) if gg is g]
+                if len(members) > 1 and not self._breaks_symmetry(members):
+                    self.symmetric_groups.append(members)
+
+        # the alphabet
+        self.choices: list[Choice] = []
+        self.raise_choices: list[list[Choice]] = []
+        self.drop_choice: list[Choice] = []
+        for tag in self.tags:
+            raises = []
+            for ops in operand_choices(sysdef, tag.instruction):
+                raises.append(self._choice("raise", tag=tag.name, operands=tuple(ops.items()),
+                                           inputs=ScanInputs(rungs={tag.name: True}, operands={tag.name: ops})))
+            self.raise_choices.append(raises)
+            self.drop_choice.append(self._choice("drop", tag=tag.name, inputs=ScanInputs(rungs={tag.name: False})))
+        self.event_choices: list[Choice] = []
+        for name, g in self.axis_defs:
+            chart = self.charts[g.chart]
+            events = sysdef.environment if sysdef.environment is not None else tuple(
+                e.name for e in chart.events if e.kind == "environment")
+            for ev in events:
+                if ev in {e.name for e in chart.events if e.kind == "environment"}:
+                    self.event_choices.append(self._choice(
+                        "event", axis=name, event=ev, inputs=ScanInputs(events=(EnvironmentEvent(name, ev),))))
+        self.fixed_choices = list(self.event_choices)
+        self.prescan = self._choice("prescan", inputs=ScanInputs(prescan=True)) if sysdef.prescan else None
+        self.nothing = self._choice("nothing", inputs=ScanInputs())
+        self.fixed_choices.append(self.nothing)
+
+        # run-time buffers and memo tables
+        self.monitor_values: list[tuple[int, ...]] = [tuple(0 for _ in s.monitors) for s in self.slots]
+        self.trace: list[Executed | Errored | Done] = []
+        self.fired: list[list[str]] = [[] for _ in self.axes]
+        for axis, f in zip(self.axes, self.fired):
+            axis.fired = f  # type: ignore[attr-defined]
+        self._axis_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...]]] = {}
+        self._tag_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...], tuple[int, ...], tuple[bool, ...]]] = {}
+
+    # -- construction helpers ----------------------------------------------------
+
+    def _choice(self, kind: str, *, tag: str | None = None, axis: str | None = None, event: str | None = None,
+                operands: tuple[tuple[str, object], ...] = (), inputs: ScanInputs) -> Choice:
+        c = Choice(len(self.choices), kind, tag, axis, event, operands, inputs)
+        self.choices.append(c)
+        return c
+
+    def _breaks_symmetry(self, members: list[int]) -> bool:
+        """Axis-specific properties would break symmetry; ours are all quantified."""
+        return False
+
+    def build_system(self, assignment: Sequence[int], backend: Callable[..., object] | None = None) -> System:
+        """A fresh concrete system in the initial state chosen by ``assignment``."""
+        make = backend or self.axis_backend
+        axes = []
+        for (name, g), ci in zip(self.axis_defs, assignment):
+            variables = dict(g.variables)
+            variables.update(dict(g.configurations[ci].variables))
+            axes.append(make(self.spec.chart(g.chart), name, state=g.state, variables=variables,
+                             parameters=self.params))
+        return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,  # type: ignore[arg-type]
+                      coarse_update_ms=self.sysdef.coarse_update_ms)
+
+    # -- state <-> system -----------------------------------------------------------
+
+    def extract(self) -> Flat:
+        """The abstract state of the model's system (after the abstractions).
+
+        A flat tuple of parts: the clock phase, then per axis its axis part
+        ``(configuration, variable values[, history], queued tags, held events)`` followed
+        by one part per tag ``(member values, rung, operands, monitors)``."""
+        system = self.system
+        flat: list[object] = [system.index % self.spu]
+        queue = system.queue
+        held = system.held_events
+        slots = self.slots
+        for ai, axis in enumerate(self.axes):
+            snap = axis.snapshot()  # type: ignore[attr-defined]
+            collapse = self.collapse_index[axis.chart.id]  # type: ignore[attr-defined]
+            values = tuple([collapse.get(i, v) for i, v in enumerate(snap[1])]) if collapse else snap[1]
+            q = tuple([self.queue_local[n] for n in queue if self.tag_axis[n] == ai]) if queue else ()
+            h = tuple([e.event for e in held if e.axis == axis.name]) if held else ()
+            if len(snap) > 2:
+                flat.append((snap[0], values, snap[2], q, h))
+            else:
+                flat.append((snap[0], values, q, h))
+            for ti in self.tags_of_axis[ai]:
+                s = slots[ti]
+                tag = s.tag
+                vals = tag.values
+                queued = tag.name in queue if queue else False
+                busy = vals.get("pending") or queued
+                if s.retire and not tag.rung and not busy and (s.rise_guard is None or s.rise_guard(vals)):
+                    flat.append(s.retired)
+                else:
+                    # operands are dead when nothing is pending and the rung is low: the
+                    # next execution needs a rise, and a rise sets every operand
+                    flat.append((tuple(vals.values()), tag.rung,
+                                 tuple(tag.operands.values()) if busy or tag.rung else s.default_ops,
+                                 self.monitor_values[ti]))
+        return tuple(flat)
+
+    def load(self, flat: Flat) -> None:
+        """Make the model's system be in abstract state ``flat``."""
+        system = self.system
+        system.index = flat[0]  # type: ignore[assignment]
+        i = 1
+        queue: list[str] = []
+        held: list[EnvironmentEvent] = []
+        slots = self.slots
+        for ai, axis in enumerate(self.axes):
+            part = flat[i]
+            i += 1
+            if len(part) > 4:  # type: ignore[arg-type]
+                config, values, hist, q, e = part  # type: ignore[misc]
+                axis.restore((config, values, hist))  # type: ignore[attr-defined]
+            else:
+                config, values, q, e = part  # type: ignore[misc]
+                axis.restore((config, values))  # type: ignore[attr-defined]
+            if q:
+                names = self.tags_of_axis[ai]
+                queue.extend([self.tags[names[k]].name for k in q])
+            if e:
+                held.extend([EnvironmentEvent(axis.name, ev) for ev in e])
+            for ti in self.tags_of_axis[ai]:
+                s = slots[ti]
+                tag = s.tag
+                fields, rung, ops, mon = flat[i]  # type: ignore[misc]
+                i += 1
+                tag.values.update(zip(s.fields, fields))
+                tag.rung = rung
+                tag.operands.update(zip(s.op_names, ops))
+                self.monitor_values[ti] = mon
+        system.queue = queue
+        system.held_events = held
+
+    def enabled(self) -> list[Choice]:
+        """The choices offered in the loaded state."""
+        out: list[Choice] = []
+        limit = self.sysdef.max_live_calls
+        queue = self.system.queue
+        live = [0] * len(self.axes)
+        if limit is not None:
+            for s in self.slots:
+                if self._live(s, queue):
+                    live[s.axis_index] += 1
+        for ti, s in enumerate(self.slots):
+            if s.tag.rung:
+                out.append(self.drop_choice[ti])
+            elif limit is None or live[s.axis_index] < limit or self._live(s, queue):
+                out.extend(self.raise_choices[ti])
+        out.extend(self.fixed_choices)
+        # A prescan pass counts as a scan of the coarse-update clock but runs no coarse
+        # update; offered only when nothing waits for one, so that requests and events
+        # cannot pile up without bound behind repeated prescans.
+        if self.prescan is not None and not queue and not self.system.held_events:
+            out.append(self.prescan)
+        return out
+
+    @staticmethod
+    def _live(s: _TagSlot, queue: list[str]) -> bool:
+        tag = s.tag
+        vals = tag.values
+        return bool(tag.rung or vals.get("pending") or tag.name in queue
+                    or (s.rise_guard is not None and not s.rise_guard(vals)))
+
+    # -- one step ---------------------------------------------------------------------
+
+    def initial(self, assignment: Sequence[int]) -> tuple[Flat, list[Property], list[Property]]:
+        """Abstract initial state for one configuration assignment, with the properties
+        violated and the goals reached in it."""
+        fresh = self.build_system(assignment)
+        for axis, f in zip(fresh.axes.values(), self.axes):
+            f.restore(axis.snapshot())  # type: ignore[attr-defined]
+        for tag, s in zip(self.tags, self.slots):
+            tag.values.update(zip(s.fields, s.initial))
+            tag.rung = False
+            tag.operands.update(zip(s.op_names, s.default_ops))
+        self.system.queue = []
+        self.system.held_events = []
+        self.system.index = 0
+        self.monitor_values = [tuple(0 for _ in s.monitors) for s in self.slots]
+        violated, reached = self.evaluate()
+        return self.extract(), violated, reached
+
+    def step(self, choice: Choice) -> tuple[Flat, list[Property], list[Property], StepFacts]:
+        """Run one scan with ``choice`` from the loaded state; return the successor, the
+        properties it violates, the goals it reaches, and what the step did."""
+        trace = self.trace
+        trace.clear()
+        for f in self.fired:
+            f.clear()
+        system = self.system
+        system.trace = trace
+        system.advance(choice.inputs)
+        system.trace = None
+        violated, reached = self.evaluate()
+        return self.extract(), violated, reached, self.facts()
+
+    def facts(self) -> StepFacts:
+        fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)  # type: ignore[attr-defined]
+        executed: list[tuple[str, str]] = []
+        errors: list[tuple[str, int, int]] = []
+        for rec in self.trace:
+            if type(rec) is Executed:
+                executed.append((self.system.tags[rec.tag].instruction.id, rec.axis_state))
+            elif type(rec) is Errored:
+                errors.append((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
+        return StepFacts(fired, tuple(executed), tuple(errors))
+
+    # -- properties ---------------------------------------------------------------------
+
+    def axis_env(self, ai: int) -> dict[str, object]:
+        axis = self.axes[ai]
+        env: dict[str, object] = dict(axis.env)  # type: ignore[attr-defined]
+        leaf = axis.leaf  # type: ignore[attr-defined]
+        env["state"] = leaf.id
+        env["active"] = axis.active  # type: ignore[attr-defined]
+        env["axis"] = axis.name  # type: ignore[attr-defined]
+        env[axis.chart.state_attribute] = leaf.value  # type: ignore[attr-defined]
+        return env
+
+    def tag_env(self, ti: int, axis_env: dict[str, object] | None) -> dict[str, object]:
+        s = self.slots[ti]
+        tag = s.tag
+        env: dict[str, object] = dict(axis_env) if axis_env else {}
+        env.update(tag.values)
+        env["rung"] = tag.rung
+        env["queued"] = tag.name in self.system.queue
+        env["instruction"] = tag.instruction.id
+        env["tag"] = tag.name
+        return env
+
+    def evaluate(self) -> tuple[list[Property], list[Property]]:
+        """Invariants violated, goals reached; updates the response monitors."""
+        violated: list[Property] = []
+        reached: list[Property] = []
+        for ai, axis in enumerate(self.axes):
+            inv, reach = self.axis_props[ai]
+            if not inv and not reach:
+                continue
+            key = axis.snapshot()  # type: ignore[attr-defined]
+            memo = self._axis_memo.get(key)
+            if memo is None:
+                env = self.axis_env(ai)
+                memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
+                self._axis_memo[key] = memo
+            for p, ok in zip(inv, memo[0]):
+                if not ok:
+                    violated.append(p)
+            for p, ok in zip(reach, memo[1]):
+                if ok:
+                    reached.append(p)
+        axis_envs: dict[int, dict[str, object]] = {}
+        queue = self.system.queue
+        for ti, s in enumerate(self.slots):
+            if not s.inv and not s.reach and not s.monitors:
+                continue
+            tag = s.tag
+            key: tuple[object, ...] = (ti, tuple(tag.values.values()), tag.rung, tag.name in queue,
+                                       self.monitor_values[ti])
+            if s.reads_axis:
+                key = (*key, self.axes[s.axis_index].snapshot())  # type: ignore[attr-defined]
+            memo2 = self._tag_memo.get(key)
+            if memo2 is None:
+                aenv = None
+                if s.reads_axis:
+                    aenv = axis_envs.get(s.axis_index)
+                    if aenv is None:
+                        aenv = self.axes[s.axis_index].expression_env()  # type: ignore[attr-defined]
+                        axis_envs[s.axis_index] = aenv
+                env = self.tag_env(ti, aenv)
+                inv_ok = tuple(_holds(p, env, p.holds) for p in s.inv)
+                goals = tuple(_holds(p, env, p.goal) for p in s.reach)
+                mons: list[int] = []
+                bad: list[bool] = []
+                for p, m in zip(s.monitors, self.monitor_values[ti]):
+                    m2, b = _monitor(p, env, m)
+                    mons.append(m2)
+                    bad.append(b)
+                memo2 = (inv_ok, goals, tuple(mons), tuple(bad))
+                self._tag_memo[key] = memo2
+            for p, ok in zip(s.inv, memo2[0]):
+                if not ok:
+                    violated.append(p)
+            for p, ok in zip(s.reach, memo2[1]):
+                if ok:
+                    reached.append(p)
+            if s.monitors:
+                self.monitor_values[ti] = memo2[2]
+                for p, b in zip(s.monitors, memo2[3]):
+                    if b:
+                        violated.append(p)
+        return violated, reached
+
+
+def _holds(p: Property, env: Mapping[str, object], e: object) -> bool:
+    if p.where is not None and not p.where(env):
+        return p.kind != "reachable"
+    return bool(e(env))  # type: ignore[operator]
+
+
+#: monitor value of a response obligation that was met (or excused) while the trigger holds
+DISCHARGED = -1
+
+
+def _monitor(p: Property, env: Mapping[str, object], m: int) -> tuple[int, bool]:
+    """Next monitor value and whether the bound was exceeded."""
+    assert p.trigger is not None and p.response is not None
+    if not p.trigger(env) or (p.where is not None and not p.where(env)):
+        return 0, False
+    if m == DISCHARGED:
+        return DISCHARGED, False
+    if p.response(env) or (p.unless is not None and p.unless(env)):
+        return DISCHARGED, False
+    m += 1
+    if m >= p.within:
+        return p.within, True
+    return m, False

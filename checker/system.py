@@ -1,0 +1,253 @@
+"""System definitions for the model checker: which axes, which instruction calls, which inputs.
+
+Pipeline position: ``spec/systems/*.yaml`` -> **checker.system** -> :mod:`checker.model`
+-> :mod:`checker.search`.
+
+A system (``format: motionchart-system/1``, schema ``spec/schema/system.schema.json``)
+chooses axis groups (an axis type, how many identical axes, the initial state and
+variables, and a list of *configurations*: alternative initial variable values, each
+of which is explored), the program (one MOTION_INSTRUCTION tag per instruction per
+axis; by default every instruction defined for the axis chart), operand domains
+(the instruction's ``domain`` unless overridden here), the environment events offered
+(by default the chart's events of kind ``environment``), whether prescan passes are
+offered, the scan and coarse-update periods, and the abstractions the search may use
+(see ``docs/checker.md``).  Every problem is reported with file, line and node path.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from statecharts import ir
+from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
+from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics
+
+SYSTEM_FORMAT = "motionchart-system/1"
+
+
+class SystemError_(InputError):  # noqa: N801 - SystemError is a builtin name
+    """A system definition is malformed."""
+
+
+@dataclass(frozen=True, slots=True)
+class Configuration:
+    """Alternative initial variable values of an axis group."""
+
+    name: str
+    variables: tuple[tuple[str, object], ...]
+    description: str
+
+
+@dataclass(frozen=True, slots=True)
+class AxisGroup:
+    """``count`` interchangeable axes of one type with the same program."""
+
+    name: str
+    axis_type: str
+    chart: str
+    count: int
+    state: str | None
+    variables: tuple[tuple[str, object], ...]
+    configurations: tuple[Configuration, ...]
+    program: tuple[str, ...]  # instruction mnemonics, one tag each per axis
+
+    def axis_names(self) -> tuple[str, ...]:
+        if self.count == 1:
+            return (self.name,)
+        return tuple(f"{self.name}{i}" for i in range(1, self.count + 1))
+
+
+@dataclass(frozen=True, slots=True)
+class SystemDef:
+    name: str
+    description: str
+    file: str
+    scan_ms: int
+    coarse_update_ms: int
+    groups: tuple[AxisGroup, ...]
+    operand_domains: tuple[tuple[str, str, tuple[object, ...]], ...]  # (instruction, operand, values)
+    environment: tuple[str, ...] | None  # None: every environment event of the chart
+    prescan: bool
+    max_live_calls: int | None  # per axis; None: unbounded
+    collapse: tuple[str, ...]  # chart variables left out of the search state
+    symmetry: bool
+    retire_idle_tags: bool
+
+    def tag_name(self, axis: str, mnemonic: str) -> str:
+        return f"{axis}_{mnemonic}"
+
+    def axes(self) -> list[tuple[str, AxisGroup]]:
+        return [(name, g) for g in self.groups for name in g.axis_names()]
+
+    def program(self) -> list[tuple[str, str, str]]:
+        """(tag, instruction, axis) in program order: axis by axis, instructions as listed."""
+        return [(self.tag_name(a, m), m, a) for a, g in self.axes() for m in g.program]
+
+    def domain(self, ins: ir.Instruction, op: ir.Operand) -> tuple[object, ...]:
+        for i, o, values in self.operand_domains:
+            if i == ins.id and o == op.name:
+                return values
+        if op.domain is not None:
+            return tuple(op.domain)
+        return (op.default,)
+
+    def scaled(self, count: int) -> SystemDef:
+        """The same system with ``count`` axes in every group (``--axes N``)."""
+        return replace(self, groups=tuple(replace(g, count=count) for g in self.groups))
+
+
+def systems_dir() -> Path:
+    return bundled_spec_dir() / "systems"
+
+
+def system_schema() -> dict[str, Any]:
+    schema: dict[str, Any] = json.loads((bundled_spec_dir() / "schema" / "system.schema.json").read_text("utf-8"))
+    return schema
+
+
+def bundled_systems() -> dict[str, Path]:
+    """Bundled system names -> files (the name is the file's ``name:``, else its stem)."""
+    out: dict[str, Path] = {}
+    for p in sorted(systems_dir().glob("*.yaml")):
+        errors: list[Diagnostic] = []
+        tree = read_yaml(p, errors)
+        name = str(tree.get("name", p.stem)) if isinstance(tree, dict) else p.stem
+        out[name] = p
+    return out
+
+
+def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
+    """Read and check one system definition against the spec; raise SystemError_ with every problem."""
+    path = Path(path)
+    name = str(path)
+    errors: list[Diagnostic] = []
+    tree = read_yaml(path, errors, what="system")
+    if tree is None:
+        if not errors:
+            errors.append(Diagnostic(name, 1, 1, "", f"empty system; expected a mapping with `format: {SYSTEM_FORMAT}`"))
+        raise SystemError_(errors)
+    problems = schema_diagnostics(name, tree, system_schema(), "a system")
+    if problems:
+        raise SystemError_(problems)
+    doc = _plain(tree)
+
+    def err(parts: tuple[Any, ...], message: str) -> None:
+        line, col = locate(tree, parts)
+        errors.append(Diagnostic(name, line, col, node_path(parts), message))
+
+    groups: list[AxisGroup] = []
+    seen_names: set[str] = set()
+    charts_used: dict[str, ir.Chart] = {}
+    for i, g in enumerate(doc["axes"]):
+        p: tuple[Any, ...] = ("axes", i)
+        try:
+            chart = spec.chart_for_axis_type(g["type"])
+        except KeyError:
+            types = sorted({t for c in spec.charts for t in c.axis_types})
+            err((*p, "type"), f"unknown axis type {g['type']!r}; expected one of: {', '.join(types)}")
+            continue
+        charts_used[chart.id] = chart
+        if g["name"] in seen_names:
+            err((*p, "name"), f"axis group name {g['name']!r} is used twice")
+        seen_names.add(g["name"])
+        state = g.get("state")
+        if state is not None and state not in {s.id for s in chart.states}:
+            err((*p, "state"), f"chart {chart.id} has no state {state!r}")
+
+        def check_vars(values: Mapping[str, object], parts: tuple[Any, ...], chart: ir.Chart = chart) -> None:
+            for vname, value in values.items():
+                try:
+                    var = chart.variable(vname)
+                except KeyError:
+                    err((*parts, vname), f"chart {chart.id} has no variable {vname!r}")
+                    continue
+                if var.domain is not None and value not in var.domain:
+                    err((*parts, vname), f"{value!r} is not in the domain of {vname}: {list(var.domain)!r}")
+
+        variables = dict(g.get("variables", {}))
+        check_vars(variables, (*p, "variables"))
+        if "AxisType" in {v.name for v in chart.variables}:
+            variables.setdefault("AxisType", g["type"])
+        configs = []
+        for j, c in enumerate(g.get("configurations", [{"name": "default"}])):
+            check_vars(c.get("variables", {}), (*p, "configurations", j, "variables"))
+            configs.append(Configuration(str(c["name"]), tuple(sorted(dict(c.get("variables", {})).items())),
+                                         str(c.get("description", ""))))
+        default_program = [ins.id for ins in spec.instructions if chart.id in ins.charts]
+        program = list(g.get("program", default_program))
+        for j, m in enumerate(program):
+            try:
+                ins = spec.instruction(m)
+            except KeyError:
+                err((*p, "program", j), f"unknown instruction {m!r}; expected one of: {', '.join(x.id for x in spec.instructions)}")
+                continue
+            if chart.id not in ins.charts:
+                err((*p, "program", j), f"{m} is not defined for chart {chart.id}")
+        if len(set(program)) != len(program):
+            err((*p, "program"), "an instruction is listed twice; each call has its own tag, list it once")
+        groups.append(AxisGroup(
+            name=g["name"], axis_type=g["type"], chart=chart.id, count=int(g.get("count", 1)), state=state,
+            variables=tuple(sorted(variables.items())), configurations=tuple(configs), program=tuple(program),
+        ))
+
+    op_domains: list[tuple[str, str, tuple[object, ...]]] = []
+    for mnemonic, ops in doc.get("operands", {}).items():
+        p = ("operands", mnemonic)
+        try:
+            ins = spec.instruction(mnemonic)
+        except KeyError:
+            err(p, f"unknown instruction {mnemonic!r}")
+            continue
+        known = {o.name for o in ins.operands if o.type not in ("axis", "tag")}
+        for oname, values in ops.items():
+            if oname not in known:
+                err((*p, oname), f"{mnemonic} has no operand {oname!r}; operands: {', '.join(sorted(known)) or '(none)'}")
+                continue
+            op_domains.append((mnemonic, oname, tuple(values)))
+
+    env_events = doc.get("environment")
+    if env_events is not None:
+        known_env = {e.name for c in charts_used.values() for e in c.events if e.kind == "environment"}
+        for j, e in enumerate(env_events):
+            if e not in known_env:
+                err(("environment", j), f"{e!r} is not an environment event; expected one of: {', '.join(sorted(known_env))}")
+
+    abstraction = doc.get("abstraction", {})
+    collapse = tuple(abstraction.get("collapse", []))
+    for j, v in enumerate(collapse):
+        if not any(v in {x.name for x in c.variables} for c in charts_used.values()):
+            err(("abstraction", "collapse", j), f"no axis chart of this system has a variable {v!r}")
+
+    scan_ms = int(doc.get("scan_ms", 10))
+    cu_ms = int(doc.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("coarse_update_ms",), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    if errors:
+        raise SystemError_(errors)
+    return SystemDef(
+        name=str(doc["name"]), description=str(doc.get("description", "")), file=name,
+        scan_ms=scan_ms, coarse_update_ms=cu_ms, groups=tuple(groups), operand_domains=tuple(op_domains),
+        environment=tuple(env_events) if env_events is not None else None,
+        prescan=bool(doc.get("prescan", True)),
+        max_live_calls=doc.get("max_live_calls"), collapse=collapse,
+        symmetry=bool(abstraction.get("symmetry", True)),
+        retire_idle_tags=bool(abstraction.get("retire_idle_tags", True)),
+    )
+
+
+def initial_assignments(sysdef: SystemDef) -> list[tuple[int, ...]]:
+    """Every choice of one configuration per axis (index into its group's list)."""
+    per_axis = [range(len(g.configurations)) for _a, g in sysdef.axes()]
+    return [tuple(c) for c in itertools.product(*per_axis)]
+
+
+def operand_choices(sysdef: SystemDef, ins: ir.Instruction) -> list[dict[str, object]]:
+    """Every assignment of the instruction's operands from their (finite) domains."""
+    ops = [o for o in ins.operands if o.type not in ("axis", "tag")]
+    domains: Sequence[tuple[object, ...]] = [sysdef.domain(ins, o) for o in ops]
+    return [dict(zip((o.name for o in ops), values)) for values in itertools.product(*domains)]

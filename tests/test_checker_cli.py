@@ -1,0 +1,175 @@
+"""``motionchart check``: exit codes, ``--json`` shape, counterexample files, GraphML, limits, bad input.
+
+The command is exercised through :func:`checker.check_cli.main` (the stand-alone entry
+that builds the same sub-parser the ``motionchart`` CLI registers).  The bundled system
+is checked once per session (a few seconds); the rest use small systems.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from checker import check_cli
+from statecharts.loader import load_spec
+from statecharts.scenario import load_scenario, run_scenario
+
+SMALL_SYSTEM = """\
+format: motionchart-system/1
+name: tiny
+scan_ms: 10
+coarse_update_ms: 10
+axes:
+  - name: Axis
+    type: AXIS_SERVO
+    program: [MSO, MASD, MASR]
+environment: [servo_fault, fault_cleared]
+prescan: false
+max_live_calls: 1
+abstraction:
+  collapse: [ServoOutput, DriveOutputCommand]
+"""
+
+# a property the chart breaks on purpose: MSO is not always refused in Shutdown... in
+# Axis Faulted it is refused with 20, so "MSO never errs" is false, reached in 2 scans
+FALSE_PROPERTY = """\
+format: motionchart-properties/1
+properties:
+  - name: mso_never_errs
+    kind: invariant
+    scope: tag
+    instruction: MSO
+    holds: "not ER"
+    source: "deliberately false"
+"""
+
+
+def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = check_cli.main(["check", *args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def bundled_json(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+    import contextlib
+    import io
+
+    buf = io.StringIO()
+    graph = Path(tmp_path_factory.mktemp("graph")) / "noncip.graphml"
+    with contextlib.redirect_stdout(buf):
+        code = check_cli.main(["check", "--json", "--graphml", str(graph)])
+    data = json.loads(buf.getvalue())
+    data["_exit"] = code
+    data["_graphml"] = str(graph)
+    return data
+
+
+def test_bundled_system_every_property_holds(bundled_json: dict[str, object]) -> None:
+    d = bundled_json
+    assert d["_exit"] == 0 and d["complete"] is True and d["verdict"] == "holds"
+    for key in ("states", "transitions", "seconds", "states_per_second", "depth", "peak_memory_mb"):
+        assert key in d
+    props = d["properties"]
+    assert isinstance(props, list) and props
+    for p in props:
+        assert {"name", "holds", "counterexample"} <= set(p)
+        assert p["holds"] is True, p
+
+
+def test_bundled_coverage_is_reported_and_unreached_codes_are_explained(bundled_json: dict[str, object]) -> None:
+    cov = bundled_json["coverage"]
+    assert isinstance(cov, dict)
+    codes = cov["error_codes"]
+    # written by hand from the documents: MSO 12/12 Object Mode conflict (RM002H-p79),
+    # MDO 13/2 Drive Output out of range (002, INT-011), MDO 12/1 (000, INT-013)
+    for item in ("MSO:12/12", "MDO:13/2", "MDO:12/1", "MSO:22"):
+        assert item in codes["reached"]
+    assert set(codes["unreached"]) <= set(codes["explained"])
+    assert {"MSO:12/15", "MSO:12/16"} <= set(codes["unreached"])  # SERCOS-only catalog entries
+    for what in ("states", "transitions"):
+        assert cov[what]["total"] >= cov[what]["reached"] > 0
+
+
+def test_bundled_graph_analyses(bundled_json: dict[str, object]) -> None:
+    import networkx as nx
+
+    g = bundled_json["graph"]
+    assert g["nodes"] == bundled_json["states"] and g["dead_ends"] == 0
+    loaded = nx.read_graphml(bundled_json["_graphml"])
+    assert loaded.number_of_nodes() == bundled_json["states"]
+
+
+def test_violation_exits_1_with_a_replayable_counterexample(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    system = tmp_path / "tiny.yaml"
+    system.write_text(SMALL_SYSTEM, encoding="utf-8")
+    props = tmp_path / "props.yaml"
+    props.write_text(FALSE_PROPERTY, encoding="utf-8")
+    code, out, _ = _run(["--system", str(system), "--properties", str(props), "--json",
+                         "--counterexamples", str(tmp_path / "cex")], capsys)
+    assert code == 1
+    d = json.loads(out)
+    (p,) = d["properties"]
+    assert p["holds"] is False and p["counterexample"]["scans"] == 2
+    path = Path(p["counterexample"]["scenario"])
+    spec = load_spec()
+    assert run_scenario(load_scenario(path, spec), spec).passed
+    code, out, _ = _run(["--system", str(system), "--properties", str(props)], capsys)
+    assert code == 1 and "VIOLATED mso_never_errs" in out and "counterexample for mso_never_errs" in out
+
+
+def test_state_limit_gives_incomplete(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(["--max-states", "50", "--json"], capsys)
+    d = json.loads(out)
+    assert code == 3 and d["complete"] is False and "state limit" in d["stop_reason"]
+    assert any(p["holds"] is None for p in d["properties"])
+
+
+def test_time_limit_gives_incomplete(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(["--system", "noncip_pairs", "--max-seconds", "0.3", "-q"], capsys)
+    assert code == 3 and "INCOMPLETE" in out
+
+
+def test_axes_scales_the_system(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    system = tmp_path / "tiny.yaml"
+    system.write_text(SMALL_SYSTEM, encoding="utf-8")
+    code1, out1, _ = _run(["--system", str(system), "--json"], capsys)
+    code2, out2, _ = _run(["--system", str(system), "--axes", "2", "--json"], capsys)
+    one, two = json.loads(out1), json.loads(out2)
+    assert code2 == code1 and two["axes"] == 2 and two["symmetric_axis_groups"] == [["Axis1", "Axis2"]]
+    n = one["states"]
+    # interchangeable axes: unordered pairs of one-axis states (times the shared clock phase, here 1)
+    assert two["states"] <= n * (n + 1) // 2
+    code3, out3, _ = _run(["--system", str(system), "--axes", "2", "--no-symmetry", "--json"], capsys)
+    assert json.loads(out3)["states"] > two["states"]
+
+
+def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = _run(["--system", "no_such_system"], capsys)
+    assert code == 2 and "unknown system" in err
+    assert _run(["--axes", "0"], capsys)[0] == 2
+    assert _run(["--max-seconds", "soon"], capsys)[0] == 2
+
+
+def test_bad_property_file_is_located(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(FALSE_PROPERTY.replace('"not ER"', '"not ER and __import__"'), encoding="utf-8")
+    code, _, err = _run(["--properties", str(bad)], capsys)
+    assert code == 1 and f"{bad}:" in err and "holds" in err
+    bad.write_text(FALSE_PROPERTY.replace('"not ER"', '"not ERROR"'), encoding="utf-8")
+    code, _, err = _run(["--properties", str(bad)], capsys)
+    assert code == 1 and "unknown name 'ERROR'" in err and ":7:" in err
+
+
+def test_bad_system_file_is_located(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(SMALL_SYSTEM.replace("[MSO, MASD, MASR]", "[MSO, MXYZ]"), encoding="utf-8")
+    code, _, err = _run(["--system", str(bad)], capsys)
+    assert code == 1 and "unknown instruction 'MXYZ'" in err and f"{bad}:" in err
+
+
+def test_list_systems(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(["--list-systems"], capsys)
+    assert code == 0 and "noncip" in out and "noncip_pairs" in out

@@ -1,0 +1,120 @@
+"""Soundness of the checker's abstractions: every engine run is a path of the checker.
+
+A run of the *engine* (python-statemachine axes, no abstraction at all) is driven by
+inputs of the checker's alphabet (one change per scan, within the system's live-call
+bound).  After every scan the engine's state is mapped through the abstraction (the
+clock phase, collapsed variables left out, dead operands reset, idle tags retired,
+axes sorted under symmetry) and must be one of the checker's successors of the
+previous abstract state.  This is what makes "holds" mean something: no engine
+behaviour is missing from the search.  The same run on the checker's own back-end
+(the IR interpreter, concrete) must give the same observations scan by scan.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from checker.compile import FastAxis
+from checker.model import Model
+from checker.properties import load_properties
+from checker.search import Codec
+from checker.system import SystemDef, bundled_systems, load_system
+from statecharts import ir
+from statecharts.engine import AxisInstance
+
+
+def _systems(spec: ir.Spec) -> dict[str, SystemDef]:
+    out = {name: load_system(path, spec) for name, path in bundled_systems().items()}
+    # two interchangeable axes with a small program, to exercise symmetry reduction
+    base = out["noncip"]
+    g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MDO", "MASD", "MAFR"))
+    out["two_axes"] = dataclasses.replace(base, name="two_axes", groups=(g,), max_live_calls=1)
+    return out
+
+
+@pytest.fixture(scope="module")
+def models(spec: ir.Spec) -> dict[str, Model]:
+    props = load_properties(spec)
+    return {name: Model(spec, sd, props) for name, sd in _systems(spec).items()}
+
+
+def _abstract(model: Model, codec: Codec, snapshot: tuple[object, ...], monitors: list[tuple[int, ...]]
+              ) -> tuple[bytes, list[tuple[int, ...]]]:
+    """alpha(concrete state): load it exactly, update the monitors, extract, encode."""
+    model.system.restore(snapshot)
+    model.monitor_values = list(monitors)
+    model.evaluate()
+    return codec.encode(model.extract()), list(model.monitor_values)
+
+
+def _successors(model: Model, codec: Codec, code: bytes) -> set[bytes]:
+    flat = codec.decode(code)
+    model.load(flat)
+    out = set()
+    for choice in model.enabled():
+        model.load(flat)
+        succ, _bad, _good, _facts = model.step(choice)
+        out.add(codec.encode(succ))
+    return out
+
+
+def _offered(model: Model, snapshot: tuple[object, ...]) -> list[int]:
+    """The checker's choices in a concrete state (not its canonical representative:
+    under symmetry the two may name the axes differently)."""
+    model.system.restore(snapshot)
+    return [c.index for c in model.enabled()]
+
+
+@pytest.mark.parametrize("name", ["noncip", "noncip_pairs", "two_axes"])
+@given(data=st.data())
+def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
+    model = models[name]
+    codec = Codec(model)
+    assignment = model.assignments[data.draw(st.integers(0, len(model.assignments) - 1), label="configuration")]
+    engine = model.build_system(assignment, backend=AxisInstance)
+    fast = model.build_system(assignment, backend=FastAxis)
+    flat0, _bad, _good = model.initial(assignment)
+    code = codec.encode(flat0)
+    monitors = list(model.monitor_values)
+    assert _abstract(model, codec, engine.snapshot(), monitors)[0] == code
+    for step in range(data.draw(st.integers(1, 25), label="scans")):
+        succs = _successors(model, codec, code)
+        choice = model.choices[data.draw(st.sampled_from(_offered(model, engine.snapshot())), label=f"choice {step}")]
+        r_engine = engine.scan(choice.inputs)
+        r_fast = fast.scan(choice.inputs)
+        assert dict(r_engine.observations) == dict(r_fast.observations), f"scan {step}: back-ends differ"
+        code, monitors = _abstract(model, codec, engine.snapshot(), monitors)
+        assert code in succs, (
+            f"scan {step} ({choice.label()}): the engine's state, mapped through the abstraction, "
+            "is not a successor in the checker")
+
+
+def test_collapse_refuses_a_variable_that_control_reads(spec: ir.Spec) -> None:
+    from checker.model import ModelError
+
+    sd = dataclasses.replace(load_system(bundled_systems()["noncip"], spec), collapse=("EnableTimer",))
+    with pytest.raises(ModelError, match="cannot collapse EnableTimer"):
+        Model(spec, sd, load_properties(spec))
+
+
+def test_idle_tags_of_the_state_instructions_may_retire(spec: ir.Spec) -> None:
+    from checker.model import retirement_check
+
+    for ins in spec.instructions:
+        assert retirement_check(spec, ins) is None, ins.id
+
+
+def test_retirement_is_refused_when_a_rise_reads_a_kept_bit(spec: ir.Spec) -> None:
+    """A table whose rise does not execute but counts in ERR: an idle tag's ERR then matters."""
+    from checker.model import retirement_check
+    from statecharts.expr import parse_assignment
+
+    ins = spec.instruction("MSO")
+    rows = tuple(dataclasses.replace(r, execute=False, actions=(parse_assignment("EN = True"), parse_assignment("ERR = ERR + 1")))
+                 if r.condition == "rung_true" else r for r in ins.table.rows)
+    broken = dataclasses.replace(ins, table=dataclasses.replace(ins.table, rows=rows))
+    assert retirement_check(spec, broken) is not None

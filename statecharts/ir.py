@@ -191,6 +191,9 @@ class TagType:
     members: tuple[TagMember, ...]
     internal: tuple[Variable, ...]  # model-only members (e.g. the pending request)
     provenance: Provenance
+    #: the error of an instruction called on an axis whose chart none of its variants
+    #: lists (e.g. MDO on a CIP axis); None: such a program is refused at load time
+    wrong_axis_family: Check | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -258,7 +261,15 @@ class Request:
 
 @dataclass(frozen=True, slots=True)
 class Instruction:
-    id: str  # mnemonic, e.g. "MSO"
+    """One variant of an instruction: its behaviour on the axes of the charts it lists.
+
+    An instruction whose documents describe different behaviour on different axis
+    families (MSO on a servo-module axis and on a CIP drive axis) has one variant per
+    family; the variants share the ``mnemonic`` and have distinct ``id`` values.
+    """
+
+    id: str  # unique variant id, e.g. "MSO" or "MSO_CIP"
+    mnemonic: str  # the instruction as the program calls it, e.g. "MSO"
     name: str
     charts: tuple[str, ...]  # axis charts this instruction is defined for
     axis_types: tuple[str, ...]
@@ -315,11 +326,28 @@ class Spec:
                 return c
         raise KeyError(chart_id)
 
-    def instruction(self, mnemonic: str) -> Instruction:
+    def instruction(self, key: str, chart: str | None = None) -> Instruction:
+        """The variant with id ``key``; else the variant of mnemonic ``key`` for ``chart``
+        (or its only variant when ``chart`` is None).  KeyError when there is none."""
+        if chart is None:
+            for i in self.instructions:
+                if i.id == key:
+                    return i
+            variants = self.variants(key)
+            if len(variants) == 1:
+                return variants[0]
+            raise KeyError(key)
         for i in self.instructions:
-            if i.id == mnemonic:
+            if i.mnemonic == key and chart in i.charts:
                 return i
-        raise KeyError(mnemonic)
+        raise KeyError(f"{key} on {chart}")
+
+    def variants(self, mnemonic: str) -> tuple[Instruction, ...]:
+        """Every variant of an instruction, in id order."""
+        return tuple(i for i in self.instructions if i.mnemonic == mnemonic)
+
+    def mnemonics(self) -> tuple[str, ...]:
+        return tuple(sorted({i.mnemonic for i in self.instructions}))
 
     def chart_for_axis_type(self, axis_type: str) -> Chart:
         for c in self.charts:

@@ -78,7 +78,7 @@ TRANSITION_KEYS = frozenset({"id", "from", "to", "event", "guard", "actions", "p
 VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description"}) | _PROVENANCE
 EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
 INSTRUCTION_KEYS = frozenset(
-    {"id", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
+    {"id", "mnemonic", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
      "aborts", "request", "done", "status_bits"}
 ) | _PROVENANCE
 OPERAND_KEYS = frozenset(
@@ -93,7 +93,8 @@ EXECUTION_TABLE_KEYS = frozenset(
 ) | _PROVENANCE
 TABLE_ROW_KEYS = frozenset({"condition", "guard", "actions", "execute", "description"}) | _PROVENANCE
 TABLE_BLOCK_KEYS = frozenset({"actions"}) | _PROVENANCE
-TAG_TYPE_KEYS = frozenset({"name", "members", "internal", "source"})
+TAG_TYPE_KEYS = frozenset({"name", "members", "internal", "wrong_axis_family", "source"})
+WRONG_AXIS_FAMILY_KEYS = frozenset({"err", "exerr", "description"}) | _PROVENANCE
 TAG_MEMBER_KEYS = frozenset({"name", "type", "bit", "description", "source"})
 INTERPRETATION_KEYS = frozenset({"id", "title", "confidence", "text", "evidence"})
 ERROR_KEYS = frozenset({"code", "name", "meaning", "confidence"}) | _PROVENANCE
@@ -119,6 +120,7 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "table_row": TABLE_ROW_KEYS,
     "table_block": TABLE_BLOCK_KEYS,
     "tag_type": TAG_TYPE_KEYS,
+    "wrong_axis_family": WRONG_AXIS_FAMILY_KEYS,
     "tag_member": TAG_MEMBER_KEYS,
     "interpretation": INTERPRETATION_KEYS,
     "error": ERROR_KEYS,
@@ -883,7 +885,7 @@ class _Builder:
             if bit not in axis_vars:
                 self.error(f, (*base, "status_bits", bit), f"unknown status bit {bit!r}{_hint(str(bit), set(axis_vars))}")
         return ir.Instruction(
-            id=node["id"], name=node["name"], charts=tuple(c.id for c in chart_list),
+            id=node["id"], mnemonic=str(node.get("mnemonic", node["id"])), name=node["name"], charts=tuple(c.id for c in chart_list),
             axis_types=tuple(node["axis_types"]), operands=tuple(operands), execution=node["execution"],
             table=table, checks=tuple(checks), aborts=tuple(aborts), request=request, done_when=done_when,
             status_bits=tuple(sorted((str(k), bool(v)) for k, v in status_bits.items())),
@@ -906,7 +908,17 @@ class _Builder:
         internal = tuple(
             self.variable(f, (*base, "internal", i), v) for i, v in enumerate(node.items("internal", "variable"))
         )
-        return ir.TagType(name=node["name"], members=tuple(members), internal=internal, provenance=self.prov(f, base, node))
+        wrong = None
+        if "wrong_axis_family" in node:
+            w = node.child("wrong_axis_family", "wrong_axis_family")
+            p = (*base, "wrong_axis_family")
+            wrong = ir.Check(
+                id="wrong_axis_family", fails_when=parse_expression("True"), err=int(w["err"]),
+                exerr=int(w.get("exerr", 0)), stage=ir.Stage.EXECUTE, description=str(w.get("description", "")),
+                provenance=self.prov(f, p, w), location=self.loc(f, p),
+            )
+        return ir.TagType(name=node["name"], members=tuple(members), internal=internal,
+                          provenance=self.prov(f, base, node), wrong_axis_family=wrong)
 
     def table(self, f: _File, parts: tuple[Any, ...], node: _Node, tag_type: ir.TagType) -> ir.ExecutionTable:
         names = [m.name for m in tag_type.members] + [v.name for v in tag_type.internal]
@@ -1116,6 +1128,13 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 continue  # what it refers to may be in the file that failed
             instructions[iid] = b.instruction(f, node, charts, tables)
             instruction_files.append((f, iid))
+            new = instructions[iid]
+            for other in instructions.values():
+                shared = set(other.charts) & set(new.charts)
+                if other is not new and other.mnemonic == new.mnemonic and shared:
+                    b.error(f, ("instruction", "charts"), (
+                        f"{new.mnemonic} already has variant {other.id!r} for chart(s) {', '.join(sorted(shared))}; "
+                        "each chart needs exactly one variant of an instruction"))
 
     # cross-file references: error codes and interpretations
     codes = {e.code for e in errors}
@@ -1127,14 +1146,15 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 p = ("instruction", kind, i)
                 if complete and codes and ch.err not in codes:
                     b.error(f, (*p, "err"), f"error code {ch.err} is not in the error catalog (errors.yaml)")
-                if complete and ch.exerr and (ins.id, ch.err, ch.exerr) not in ext_pairs:
-                    b.error(f, (*p, "exerr"), f"extended error {ch.err}/{ch.exerr} of {ins.id} is not in extended_errors")
+                if complete and ch.exerr and (ins.mnemonic, ch.err, ch.exerr) not in ext_pairs:
+                    b.error(f, (*p, "exerr"), f"extended error {ch.err}/{ch.exerr} of {ins.mnemonic} is not in extended_errors")
     if complete:
         for f in files:
             for i, n in enumerate(f.top.items("extended_errors", "extended_error")):
-                if n["instruction"] not in instructions and instructions:
+                mnemonics = {x.mnemonic for x in instructions.values()}
+                if n["instruction"] not in mnemonics and instructions:
                     b.error(f, ("extended_errors", i, "instruction"), (
-                        f"unknown instruction {n['instruction']!r}; instructions: {', '.join(sorted(instructions))}"))
+                        f"unknown instruction {n['instruction']!r}; instructions: {', '.join(sorted(mnemonics))}"))
     for interp_id, f, parts in b.interp_refs:
         b.used_interpretations.add(interp_id)
         if interp_id not in interp_where and complete:

@@ -38,6 +38,7 @@ rules.  With :attr:`System.trace` set to a list, a scan appends explicit
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -168,7 +169,7 @@ class System:
             a.env["coarse_update_ms"] = coarse_update_ms
         self.tags: dict[str, TagInstance] = {}
         for tag, mnemonic, axis in program:
-            self.tags[tag] = TagInstance(tag, spec.instruction(mnemonic), spec.tag_type, axis)
+            self.tags[tag] = TagInstance(tag, self.variant(mnemonic, axis), spec.tag_type, axis)
         self.scan_ms = scan_ms
         self.coarse_update_ms = coarse_update_ms
         self.scans_per_update = max(1, coarse_update_ms // scan_ms)
@@ -177,6 +178,23 @@ class System:
         self.held_events: list[EnvironmentEvent] = []
         #: when a list, scans append Executed / Errored / Done records to it
         self.trace: list[Executed | Errored | Done] | None = None
+
+    def variant(self, mnemonic: str, axis: str) -> ir.Instruction:
+        """The variant of ``mnemonic`` for the axis's chart.
+
+        An instruction with no variant for that chart keeps the operands and execution
+        table of its first variant but only ever errs, with the tag type's
+        ``wrong_axis_family`` error (ERR 8, Wrong Axis Type; INT-001)."""
+        chart = self.axes[axis].chart.id
+        try:
+            return self.spec.instruction(mnemonic, chart)
+        except KeyError:
+            pass
+        variants = self.spec.variants(mnemonic) or (self.spec.instruction(mnemonic),)
+        wrong = self.spec.tag_type.wrong_axis_family
+        if wrong is None:
+            raise ValueError(f"{mnemonic} has no variant for chart {chart}")
+        return dataclasses.replace(variants[0], checks=(wrong,), aborts=(), request=None, done_when=None)
 
     # -- the scan ---------------------------------------------------------------
 

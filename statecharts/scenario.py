@@ -216,19 +216,19 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         p = ("setup", "program", i)
         if entry["tag"] in tag_ins:
             err((*p, "tag"), f"tag {entry['tag']!r} is used twice; each instruction needs its own MOTION_INSTRUCTION tag")
-        try:
-            ins = spec.instruction(entry["instruction"])
-        except KeyError:
-            err((*p, "instruction"), f"unknown instruction {entry['instruction']!r}; expected one of: {', '.join(i.id for i in spec.instructions)}")
+        variants = spec.variants(entry["instruction"])
+        if not variants:
+            err((*p, "instruction"), f"unknown instruction {entry['instruction']!r}; expected one of: {', '.join(spec.mnemonics())}")
             continue
+        ins = variants[0]
         if entry["axis"] not in setup["axes"]:
             err((*p, "axis"), f"unknown axis {entry['axis']!r}; axes: {', '.join(setup['axes'])}")
-        elif entry["axis"] in charts and charts[entry["axis"]].id not in ins.charts:
-            err((*p, "axis"), (f"{ins.id} is defined for charts {', '.join(ins.charts)}; axis {entry['axis']!r} "
-                               f"follows chart {charts[entry['axis']].id}"))
+        elif entry["axis"] in charts:
+            # an axis family without a variant is legal: the instruction errs at run time
+            ins = next((v for v in variants if charts[entry["axis"]].id in v.charts), variants[0])
         tag_ins[entry["tag"]] = ins
         ops = _operands(ins, entry.get("operands", {}), (*p, "operands"), err)
-        program.append(ProgramEntry(entry["tag"], ins.id, entry["axis"], tuple(sorted(ops.items()))))
+        program.append(ProgramEntry(entry["tag"], ins.mnemonic, entry["axis"], tuple(sorted(ops.items()))))
 
     steps: list[Step] = []
     for i, s in enumerate(doc["steps"]):

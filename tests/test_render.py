@@ -441,3 +441,9 @@ def test_module_examples_run(module: object) -> None:
 def test_chart_class_names_known_charts() -> None:
     with pytest.raises(KeyError, match="AxisNonCIP"):
         statecharts.api.chart_class("Nope")
+
+
+def test_committed_generated_artefacts_are_fresh() -> None:
+    """generated/ in the checkout is what the spec and scenarios give now (fix: make generate)."""
+    code, msg, err = run(["generate", "-o", str(ROOT / "generated"), "--check", "--scenarios", str(ROOT / "scenarios")])
+    assert code == 0, f"generated/ is stale; run `make generate` and commit the result\n{msg}{err}"

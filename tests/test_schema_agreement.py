@@ -53,6 +53,7 @@ SCHEMA_NODES: dict[str, tuple[str, ...]] = {
     "table_block": tuple(f"/properties/execution_tables/items/properties/{k}"
                          for k in ("on_execute", "on_error", "on_accept", "on_done")),
     "tag_type": ("/properties/tag_type",),
+    "wrong_axis_family": ("/properties/tag_type/properties/wrong_axis_family",),
     "tag_member": ("/properties/tag_type/properties/members/items",),
     "interpretation": ("/properties/interpretations/items",),
     "error": ("/properties/errors/items",),
@@ -153,6 +154,7 @@ IR_RECORDS: dict[str, tuple[type, dict[str, str]]] = {
     "execution_table": (ir.ExecutionTable, _PROV),
     "table_row": (ir.TableRow, _PROV),
     "tag_type": (ir.TagType, _PROV),
+    "wrong_axis_family": (ir.Check, _PROV),
     "tag_member": (ir.TagMember, _PROV),
     "interpretation": (ir.Interpretation, {}),
     "error": (ir.ErrorCode, _PROV),

@@ -108,6 +108,7 @@ instruction = {
     "required": ["id", "name", "charts", "axis_types", "operands", "execution", "execution_table", "checks", "done", "source"],
     "properties": {
         "id": ID, "name": {"type": "string"},
+        "mnemonic": {**ID, "description": "The instruction as a program calls it; defaults to id. Variants of one mnemonic list disjoint charts."},
         "charts": {"type": "array", "items": ID, "minItems": 1},
         "axis_types": {"type": "array", "items": ID, "minItems": 1},
         "description": {"type": "string"},
@@ -153,6 +154,13 @@ tag_type = {
     "required": ["name", "members", "source"],
     "properties": {
         "name": ID, "source": SOURCE,
+        "wrong_axis_family": {
+            "type": "object", "additionalProperties": False, "required": ["err", "source"],
+            "description": "The error of an instruction called on an axis none of its variants' charts covers.",
+            "properties": {
+                "err": {"type": "integer", "minimum": 1}, "exerr": {"type": "integer", "minimum": 0},
+                "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
+            }},
         "members": {"type": "array", "items": {
             "type": "object", "additionalProperties": False,
             "required": ["name", "type", "source"],

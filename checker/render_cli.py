@@ -153,17 +153,25 @@ def _check_out_dir(out: Path, prog: str) -> int | None:
     return None
 
 
-def _docs(args: argparse.Namespace, prog: str) -> int:
-    from statecharts.loader import load_spec
-    from statecharts.render.generate import build, write
-
-    out = Path(args.output)
-    bad = _check_out_dir(out, prog)
+def _check_inputs(args: argparse.Namespace, prog: str) -> int | None:
+    """The exit code when the output directory or a scenario directory is unusable."""
+    bad = _check_out_dir(Path(args.output), prog)
     if bad is not None:
         return bad
     missing = [s for s in (args.scenarios or []) if not Path(s).exists()]
     if missing:
         return _fail(prog, f"no such scenario directory: {', '.join(missing)}", EXIT_USAGE)
+    return None
+
+
+def _docs(args: argparse.Namespace, prog: str) -> int:
+    from statecharts.loader import load_spec
+    from statecharts.render.generate import build, write
+
+    out = Path(args.output)
+    bad = _check_inputs(args, prog)
+    if bad is not None:
+        return bad
     spec = load_spec(args.spec)
     artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False)
     try:
@@ -180,12 +188,9 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
     from statecharts.render.generate import FIX_COMMAND, build, stale_files, write
 
     out = Path(args.output)
-    bad = _check_out_dir(out, prog)
+    bad = _check_inputs(args, prog)
     if bad is not None:
         return bad
-    missing = [s for s in (args.scenarios or []) if not Path(s).exists()]
-    if missing:
-        return _fail(prog, f"no such scenario directory: {', '.join(missing)}", EXIT_USAGE)
     spec = load_spec(args.spec)
     if args.check:
         artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip")

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate install deps-system lint clean
+.PHONY: check test deep generate bench install deps-system lint clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -32,7 +32,8 @@ deps-system:
 
 check: install
 	@$(BIN)/motionchart validate
-	@$(BIN)/motionchart simulate --quiet scenarios
+	@$(BIN)/motionchart simulate --summary scenarios
+	@$(BIN)/motionchart check
 
 test: install
 	@$(BIN)/python -m pytest
@@ -40,6 +41,10 @@ test: install
 # Diagrams, reference docs and SCXML in generated/, rebuilt from the spec.
 generate: install
 	@$(BIN)/motionchart generate
+
+# Checker speed against a hand-written reference BFS (prints figures; not a test).
+bench: install
+	@$(BIN)/python benchmarks/bench.py
 
 # Longer property-based runs than CI affords.
 deep: install

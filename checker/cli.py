@@ -59,6 +59,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.add_argument("--quiet", "-q", action="store_true", help="print only the summary line of each scenario")
+    s.add_argument("--summary", action="store_true", help="print only failed scenarios and the closing count")
 
     check_cli.register(sub)
     render_cli.register(sub)
@@ -225,21 +226,23 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
                 print(d, file=sys.stderr)
             continue
         results.append(result)
+        if args.summary and result.passed:
+            continue
         if not args.json:
-            if not args.quiet:
+            if not (args.quiet or args.summary):
                 _print_table(result, out)
             verdict = "PASS" if result.passed else "FAIL"
             out.write(f"{verdict} {scenario.name} ({len(result.rows)} scans)\n")
             for m in result.mismatches:
-                out.write(f"  {scenario.file}:{m}\n")
-            if not args.quiet:
+                out.write(f"  {m.located(scenario.file)}\n")
+            if not (args.quiet or args.summary):
                 out.write("\n")
     failed = [r for r in results if not r.passed]
     if args.json:
         json.dump({"results": [_result_json(r) for r in results], "input_errors": input_errors,
                    "passed": len(results) - len(failed), "failed": len(failed)}, out, indent=2, sort_keys=True, default=str)
         out.write("\n")
-    elif len(files) > 1 or input_errors:
+    elif len(files) > 1 or input_errors or args.summary:
         out.write(f"scenarios: {len(results) - len(failed)} passed, {len(failed)} failed, "
                   f"{len(files) - len(results)} invalid\n")
     return EXIT_FAIL if failed or input_errors else EXIT_OK

@@ -13,7 +13,9 @@ in ``docs/semantics.md``.  In short, one call of :meth:`System.scan` is one PLC 
 2. Coarse update (every ``coarse_update_ms / scan_ms`` scans, the first scan included):
    for each axis in set-up order,
    o. the drive model advances to the time of this update: the chart receives
-      ``tick`` (so a delay started by a request at this update counts from now);
+      ``tick`` (so a delay started by a request at this update counts from now), and
+      instructions delivered earlier and still pending are finished (DN / ER / still
+      pending), so what the passing time completed is done before new requests act;
    a. queued requests in program order: every check of the instruction is evaluated
       again, in order (stage ``message`` included); the first failing one ends the
       instruction with ER; otherwise the request's actions are applied, its event is
@@ -296,6 +298,8 @@ class System:
         events, self.held_events = self.held_events, []
         for axis in self.axes.values():
             axis.send("tick")
+            # what the passing time completed is done before this update's requests
+            self._finish_pending(axis.name)
             for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
                 self.queue.remove(name)
                 tag = self.tags[name]
@@ -317,8 +321,12 @@ class System:
                 if ev.axis == axis.name:
                     axis.apply_event_actions(ev.event)
                     axis.send(ev.event)
+        self._finish_pending(None)
+
+    def _finish_pending(self, axis: str | None) -> None:
+        """Finish every delivered, still pending instruction (of one axis, or of all)."""
         for tag in self.tags.values():
-            if tag.values.get("pending") and tag.name not in self.queue:
+            if (axis is None or tag.axis == axis) and tag.values.get("pending") and tag.name not in self.queue:
                 self._finish(tag)
 
     def _finish(self, tag: TagInstance) -> None:

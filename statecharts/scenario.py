@@ -83,7 +83,18 @@ class Mismatch:
     def __str__(self) -> str:
         label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
         return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
-                f"expected {self.expected!r}, got {self.actual!r}")
+                f"expected {_yaml_value(self.expected)}, got {_yaml_value(self.actual)}")
+
+    def located(self, file: str) -> str:
+        """``file:line: step ...``, the form editors and CI annotations understand."""
+        return f"{file}:{self}".replace(":line ", ":", 1)
+
+
+def _yaml_value(value: object) -> str:
+    """Spell a value as it is written in a scenario (true/false, not True/False)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value)
 
 
 @dataclass(frozen=True, slots=True)

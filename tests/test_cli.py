@@ -221,6 +221,18 @@ def test_simulate_quiet(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> N
         assert out == "PASS MSO enables a ready servo axis (CLI test) (2 scans)\n"
 
 
+def test_simulate_summary_prints_failures_and_the_count(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    good = write(tmp_path, BASE, "a_good.yaml")
+    rc, out, _ = run(capsys, "simulate", "--summary", str(good))
+    assert (rc, out) == (0, "scenarios: 1 passed, 0 failed, 0 invalid\n")
+    bad = write(tmp_path, variant("mso1: {EN: false, DN: true}", "mso1: {EN: false, DN: false}"), "b_bad.yaml")
+    rc, out, _ = run(capsys, "simulate", "--summary", str(good), str(bad))
+    assert rc == 1
+    lines = out.splitlines()
+    assert lines[0].startswith("FAIL ") and "mso1.DN expected false, got true" in lines[1]
+    assert lines[-1] == "scenarios: 1 passed, 1 failed, 0 invalid"
+
+
 def test_simulate_json(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     good = write(tmp_path, BASE, "a_good.yaml")
     bad = write(tmp_path, variant("mso1: {EN: false, DN: true}", "mso1: {EN: false, DN: false}"), "b_bad.yaml")
@@ -242,7 +254,7 @@ def test_simulate_failing_expectation_names_step_and_field(capsys: pytest.Captur
     rc, out, _ = run(capsys, "simulate", "--quiet", str(path))
     assert rc == 1
     assert out.startswith("FAIL ")
-    assert f"{path}:line {line_of(path, 'rung goes true')}: step 1 (rung goes true), scan 0: mso1.DN expected False, got True" in out
+    assert f"{path}:{line_of(path, 'rung goes true')}: step 1 (rung goes true), scan 0: mso1.DN expected false, got true" in out
 
 
 def test_simulate_directory_and_summary(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
@@ -276,7 +288,7 @@ def test_simulate_spec_directory_changes_the_outcome(capsys: pytest.CaptureFixtu
     path = write(tmp_path, BASE)
     assert run(capsys, "simulate", "-q", str(path))[0] == 0
     rc, out, _ = run(capsys, "simulate", "-q", "--spec", str(spec_copy), str(path))
-    assert rc == 1 and "mso1.ER expected False, got True" in out
+    assert rc == 1 and "mso1.ER expected false, got true" in out
 
 
 @pytest.mark.parametrize("args", [["missing.yaml"], ["--spec", "no/such/dir", "SCENARIO"]])

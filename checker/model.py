@@ -238,6 +238,8 @@ class Model:
         self.spu = self.system.scans_per_update
         self.axes = list(self.system.axes.values())
         self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
+        # a property tied to a chart the system has no axis of does not apply to it
+        self.properties = tuple(p for p in self.properties if p.chart is None or p.chart in self.charts)
         self.notes: list[str] = []
 
         # cone of influence and the collapse abstraction

@@ -338,6 +338,9 @@ class Spec:
                 return variants[0]
             raise KeyError(key)
         for i in self.instructions:
+            if i.id == key and chart in i.charts:
+                return i
+        for i in self.instructions:
             if i.mnemonic == key and chart in i.charts:
                 return i
         raise KeyError(f"{key} on {chart}")

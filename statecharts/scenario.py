@@ -179,6 +179,10 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         if not errors:
             errors.append(Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
         raise ScenarioError(errors)
+    if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
+        # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
+        from statecharts import aoi
+        return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
@@ -358,6 +362,10 @@ def _same(expected: object, actual: object) -> bool:
 def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
     """Run every step; an expression that cannot be evaluated on the scenario's values
     (e.g. a division by zero) is a ScenarioError naming the step."""
+    from statecharts import aoi
+    if isinstance(scenario, aoi.AoiScenario):
+        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
+        return result
     try:
         system = build_system(scenario, spec)
     except (EvalError, ValueError) as exc:

@@ -354,6 +354,12 @@ def render(doc: dict) -> str:
 SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
+# the add-on instruction's own languages (docs/aoi.md); defined beside their loader
+from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, SUB_SCHEMA  # noqa: E402
+
+SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
+                "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
+
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"
     for name, doc in SCHEMAS.items():

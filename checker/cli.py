@@ -23,7 +23,7 @@ from typing import TextIO
 from checker import check_cli, render_cli
 from statecharts.diagnostics import InputError
 from statecharts.loader import load_spec
-from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scenario_files
+from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scenario_files
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -154,20 +154,12 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
     return EXIT_OK
 
 
-def _fmt(value: object) -> str:
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float):
-        return f"{value:g}"
-    return str(value)
-
-
 def _print_table(result: ScenarioResult, out: TextIO) -> None:
     out.write(f"scenario: {result.scenario.name}  ({result.scenario.file})\n")
     out.write(f"{'scan':>5}  {'step':<28}  changes\n")
     for row in result.rows:
         label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
-        changes = "  ".join(f"{o}.{f}={_fmt(a)}" for o, f, _b, a in row.changes) or "-"
+        changes = "  ".join(f"{o}.{f}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
         cu = "" if row.record.coarse_update else " (no coarse update)"
         out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
 

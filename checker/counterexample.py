@@ -24,7 +24,7 @@ from pathlib import Path
 from checker.model import Choice
 from checker.properties import Property
 from checker.search import SearchResult, Witness
-from statecharts.scenario import SCENARIO_FORMAT
+from statecharts.scenario import SCENARIO_FORMAT, scan_cell
 
 
 class ReplayError(RuntimeError):
@@ -183,19 +183,11 @@ def write_scenario(result: SearchResult, trace: Trace, prop: Property | None, di
     return path
 
 
-def _fmt(value: object) -> str:
-    if isinstance(value, bool):
-        return "1" if value else "0"
-    if isinstance(value, float):
-        return f"{value:g}"
-    return str(value)
-
-
 def table_text(trace: Trace) -> str:
     """The run as a per-scan table: input and the observations that changed."""
     rows = [f"{'scan':>5}  {'input':<36}  changes"]
     for st in trace.steps:
-        changes = "  ".join(f"{o}.{f}={_fmt(a)}" for o, f, _b, a in st.changes if f != "FLAGS") or "-"
+        changes = "  ".join(f"{o}.{f}={scan_cell(a)}" for o, f, _b, a in st.changes if f != "FLAGS") or "-"
         cu = "" if st.coarse_update else " (no coarse update)"
         rows.append(f"{st.index:>5}  {st.choice.label()[:36]:<36}  {changes}{cu}")
     return "\n".join(rows) + "\n"

@@ -97,6 +97,15 @@ def _yaml_value(value: object) -> str:
     return repr(value)
 
 
+def scan_cell(value: object) -> str:
+    """Spell a value in a per-scan table: bits as 1/0, reals without trailing zeros."""
+    if isinstance(value, bool):
+        return "1" if value else "0"
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
 @dataclass(frozen=True, slots=True)
 class ScanRow:
     """One scan of a run, with the step it belongs to and what changed."""

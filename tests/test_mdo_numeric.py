@@ -2,20 +2,29 @@
 
 * the Drive Output is in volts, or in percent of the Output Limit;
 * the output is clamped to +/- Output Limit;
+* a Negative Servo Output Polarity inverts it (002: MDO is affected by the Servo
+  Output Polarity bit, INT-051);
+* the 16-bit DAC gives it in steps of 20 V / 65536, about 305 uV (002), truncated
+  toward zero so that it never exceeds the limit (INT-052);
 * during the ~500 ms drive-enable delay the output stays at the Output Offset, and DN
   is set when the commanded value is applied (after the delay, at a coarse update);
-* a Drive Output beyond 10 V (or 100 %) is an error (13, EXERR 2: INT-011).
+  the offset is not added to the applied value (002: "thereafter the output voltage is
+  given by the specified Drive Output value", INT-051);
+* lowering the Output Limit below the applied output clamps it (002), at the next
+  coarse update (INT-053);
+* a Drive Output beyond 10 V (or 100 %) is an error (13, EXERR 2: INT-011); a negative
+  Output Limit is refused with 12/3 (INT-054); MDF returns the output to the Output
+  Offset (domain-facts §4 MDF).
 
-What 002 documents but the model does not yet do is kept as strict expected failures:
-Servo Output Polarity, the 16-bit DAC resolution (about 305 uV), re-clamping when the
-Output Limit is lowered after the output was applied, and refusing a negative Output
-Limit.
+Every expected value below is computed by the functions of this file, written from the
+documents; nothing is read from spec/.
 """
 
 from __future__ import annotations
 
 import math
 import sys
+from fractions import Fraction
 from pathlib import Path
 
 import pytest
@@ -26,27 +35,57 @@ try:
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from statecharts.diagnostics import ScenarioError
 from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
 from statecharts.scan import ScanInputs, System
+from statecharts.scenario import load_scenario, run_scenario
 
 SPEC = load_spec()
 DELAY_MS = 500  # 002 Description: typically 500 ms between drive enable and the output
+DAC_STEP = Fraction(20, 65536)  # 002 Description: 16-bit DAC, 305 uV (a 20 V span)
 
 
-def documented_output(drive_output: float, units: int, output_limit: float) -> float:
-    """The analog output 002 describes: volts, or percent of the limit, clamped to the limit."""
+def dac(volts: float) -> float:
+    """The voltage a 16-bit DAC gives for ``volts``: whole steps, truncated toward zero."""
+    steps = int(Fraction(volts) / DAC_STEP)  # int() truncates toward zero, exactly
+    return float(steps * DAC_STEP)
+
+
+def documented_output(drive_output: float, units: int, output_limit: float, polarity: str = "Positive") -> float:
+    """The analog output 002 describes: volts, or percent of the limit, clamped to the
+    limit, inverted by a Negative Servo Output Polarity, in DAC steps."""
     volts = drive_output if units == 0 else drive_output * output_limit / 100.0
-    return max(-output_limit, min(output_limit, volts))
+    clamped = max(-output_limit, min(output_limit, volts))
+    return dac(-clamped if polarity == "Negative" else clamped)
 
 
-def _system(coarse_ms: int, limit: float, offset: float, drive_output: float, units: int) -> System:
+def reclamped(output: float, new_limit: float) -> float:
+    """002: an Output Limit reduced below the present output clamps the output to it."""
+    if abs(output) <= new_limit:
+        return output
+    return math.copysign(dac(new_limit), output)
+
+
+def _system(coarse_ms: int, limit: float, offset: float, drive_output: float, units: int,
+            polarity: str = "Positive") -> System:
     params = {"scan_ms": coarse_ms, "coarse_update_ms": coarse_ms}
     axis = AxisInstance(SPEC.chart("AxisNonCIP"), "A", state="AxisReady",
-                        variables={"OutputLimit": limit, "OutputOffset": offset}, parameters=params)
-    system = System(SPEC, [axis], [("mdo", "MDO", "A")], scan_ms=coarse_ms, coarse_update_ms=coarse_ms)
+                        variables={"OutputLimit": limit, "OutputOffset": offset, "ServoOutputPolarity": polarity},
+                        parameters=params)
+    program = [("mdo", "MDO", "A"), ("mdf", "MDF", "A")]
+    system = System(SPEC, [axis], program, scan_ms=coarse_ms, coarse_update_ms=coarse_ms)
     system.tags["mdo"].operands.update({"DriveOutput": drive_output, "DriveUnits": units})
     return system
+
+
+def _applied(system: System) -> dict[str, object]:
+    """Raise the MDO rung and scan until its DN (at most 600 scans)."""
+    for _ in range(600):
+        obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+        if obs["mdo"]["DN"] or obs["mdo"]["ER"]:
+            return {"mdo": dict(obs["mdo"]), "A": dict(obs["A"])}
+    raise AssertionError("MDO never finished")
 
 
 @given(
@@ -73,6 +112,80 @@ def test_mdo_output_units_clamp_and_delay(units: int, fraction: float, limit: fl
     assert abs(obs["A"]["ServoOutput"]) <= limit + 1e-12
 
 
+@given(
+    units=st.sampled_from([0, 1]),
+    drive_output=st.floats(-100.0, 100.0, allow_nan=False),
+    limit=st.floats(0.0, 10.0, allow_nan=False),
+    offset=st.floats(-2.0, 2.0, allow_nan=False),
+    polarity=st.sampled_from(["Positive", "Negative"]),
+)
+def test_mdo_output_with_polarity_offset_and_dac(units: int, drive_output: float, limit: float, offset: float,
+                                                 polarity: str) -> None:
+    if units == 0:
+        drive_output = drive_output / 10.0  # within the 10 V range of Volts
+    system = _system(100, limit, offset, drive_output, units, polarity)
+    first = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    # during the enable delay: the Output Offset as configured, not inverted (INT-051)
+    assert first["A"]["ServoOutput"] == offset
+    out = _applied(system)
+    assert out["mdo"]["DN"] is True and out["mdo"]["ERR"] == 0
+    expected = documented_output(drive_output, units, limit, polarity)
+    assert out["A"]["ServoOutput"] == pytest.approx(expected, abs=1e-12)
+    # a whole number of DAC steps, never beyond the limit
+    steps = Fraction(out["A"]["ServoOutput"]) / DAC_STEP
+    assert steps.denominator == 1 and abs(out["A"]["ServoOutput"]) <= limit
+    # the other polarity gives exactly the opposite output
+    other = _applied(_system(100, limit, offset, drive_output, units,
+                             "Positive" if polarity == "Negative" else "Negative"))
+    assert other["A"]["ServoOutput"] == -out["A"]["ServoOutput"]
+
+
+@given(
+    drive_output=st.floats(-10.0, 10.0, allow_nan=False),
+    new_limit=st.floats(0.0, 10.0, allow_nan=False),
+    polarity=st.sampled_from(["Positive", "Negative"]),
+)
+def test_lowered_output_limit_reclamps_at_the_next_coarse_update(drive_output: float, new_limit: float,
+                                                                 polarity: str) -> None:
+    system = _system(100, 10.0, 0.0, drive_output, 0, polarity)
+    applied = _applied(system)["A"]["ServoOutput"]
+    assert applied == pytest.approx(documented_output(drive_output, 0, 10.0, polarity), abs=1e-12)
+    system.axes["A"].env["OutputLimit"] = new_limit
+    obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    assert obs["A"]["ServoOutput"] == pytest.approx(reclamped(applied, new_limit), abs=1e-12)
+    assert obs["A"]["AxisState"] == 1 and obs["mdo"]["ER"] is False
+    # raising the limit again does not bring the earlier output back (INT-053)
+    system.axes["A"].env["OutputLimit"] = 10.0
+    obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    assert obs["A"]["ServoOutput"] == pytest.approx(reclamped(applied, new_limit), abs=1e-12)
+
+
+@given(limit=st.one_of(st.floats(-10.0, -1e-9, allow_nan=False), st.just(float("nan"))),
+       units=st.sampled_from([0, 1]))
+def test_negative_output_limit_is_refused_with_12_3(limit: float, units: int) -> None:
+    system = _system(10, limit, 0.0, 5.0, units)
+    obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    # INT-054: Servo Message Failure (12), EXERR 3 Invalid value; the axis is untouched
+    assert (obs["mdo"]["ER"], obs["mdo"]["ERR"], obs["mdo"]["EXERR"], obs["mdo"]["DN"]) == (True, 12, 3, False)
+    assert obs["A"]["AxisState"] == 0 and obs["A"]["DriveEnableStatus"] is False
+
+
+def test_zero_output_limit_is_valid_and_holds_zero_volts() -> None:
+    system = _system(100, 0.0, 0.0, 5.0, 0)
+    out = _applied(system)
+    assert out["mdo"]["DN"] is True and out["A"]["ServoOutput"] == 0.0
+
+
+@given(drive_output=st.floats(-10.0, 10.0, allow_nan=False), offset=st.floats(-2.0, 2.0, allow_nan=False))
+def test_mdf_returns_the_output_to_the_output_offset(drive_output: float, offset: float) -> None:
+    system = _system(100, 10.0, offset, drive_output, 0)
+    _applied(system)
+    obs = system.scan(ScanInputs(rungs={"mdo": True, "mdf": True})).observations
+    # domain-facts §4 MDF: drive disabled, servo output at the Output Offset
+    assert obs["mdf"]["DN"] is True and obs["A"]["AxisState"] == 0
+    assert obs["A"]["DriveEnableStatus"] is False and obs["A"]["ServoOutput"] == offset
+
+
 @given(units=st.sampled_from([0, 1]), excess=st.floats(1.0001, 100.0, allow_nan=False), sign=st.sampled_from([-1, 1]))
 def test_mdo_drive_output_too_large_errs(units: int, excess: float, sign: int) -> None:
     drive_output = sign * excess * (10.0 if units == 0 else 100.0)
@@ -82,12 +195,24 @@ def test_mdo_drive_output_too_large_errs(units: int, excess: float, sign: int) -
     assert obs["A"]["AxisState"] == 0
 
 
-@pytest.mark.xfail(strict=True, reason="Servo Output Polarity (002: MDO is affected by it) is not modelled yet")
+@given(units=st.integers(2, 1000), drive_output=st.floats(-100.0, 100.0, allow_nan=False))
+def test_drive_units_other_than_0_or_1_is_13_3(units: int, drive_output: float) -> None:
+    # 002 Operands: 0 Volts, 1 Percent; INT-011: Drive Units is operand 3
+    system = _system(10, 10.0, 0.0, drive_output, units)
+    obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    assert (obs["mdo"]["ER"], obs["mdo"]["ERR"], obs["mdo"]["EXERR"]) == (True, 13, 3)
+    assert obs["A"]["AxisState"] == 0
+
+
 def test_servo_output_polarity_inverts_the_output() -> None:
     assert "ServoOutputPolarity" in {v.name for v in SPEC.chart("AxisNonCIP").variables}
+    system = _system(500, 10.0, 0.25, 5.0, 0, "Negative")
+    first = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    assert first["A"]["ServoOutput"] == 0.25
+    obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
+    assert obs["mdo"]["DN"] is True and obs["A"]["ServoOutput"] == -5.0
 
 
-@pytest.mark.xfail(strict=True, reason="the 16-bit DAC resolution (about 305 uV) is not modelled yet")
 def test_output_is_quantised_to_the_dac_resolution() -> None:
     system = _system(500, 10.0, 0.0, 1.0001, 0)
     system.scan(ScanInputs(rungs={"mdo": True}))
@@ -96,7 +221,6 @@ def test_output_is_quantised_to_the_dac_resolution() -> None:
     assert obs["A"]["ServoOutput"] == pytest.approx(round(1.0001 / step) * step, abs=1e-12)
 
 
-@pytest.mark.xfail(strict=True, reason="lowering the Output Limit after the output was applied does not re-clamp it yet")
 def test_lowering_output_limit_later_clamps_the_output() -> None:
     system = _system(500, 10.0, 0.0, 8.0, 0)
     system.scan(ScanInputs(rungs={"mdo": True}))
@@ -106,8 +230,29 @@ def test_lowering_output_limit_later_clamps_the_output() -> None:
     assert obs["A"]["ServoOutput"] == pytest.approx(5.0)
 
 
-@pytest.mark.xfail(strict=True, reason="a negative Output Limit is not refused yet (no documented error is modelled)")
 def test_negative_output_limit_is_refused() -> None:
     system = _system(10, -1.0, 0.0, 5.0, 0)
     obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
     assert obs["mdo"]["ER"] is True
+
+
+def _scenario(tmp_path: Path, units: str) -> Path:
+    p = tmp_path / "units.yaml"
+    p.write_text(
+        "format: motionchart-scenario/1\nname: bad units\n"
+        "setup:\n  axes:\n    A: {type: AXIS_SERVO}\n"
+        f"  program:\n    - {{tag: t, instruction: MDO, axis: A, operands: {{DriveOutput: 5.0, DriveUnits: {units}}}}}\n"
+        "steps:\n  - rungs: {t: true}\n    expect:\n      t: {ER: true, ERR: 13, EXERR: 3}\n", encoding="utf-8")
+    return p
+
+
+def test_unknown_drive_units_text_is_a_clear_scenario_error(tmp_path: Path) -> None:
+    with pytest.raises(ScenarioError) as exc:
+        load_scenario(_scenario(tmp_path, "Amps"), SPEC)
+    text = str(exc.value)
+    assert "DriveUnits" in text and "Volts" in text and "Percent" in text and "Traceback" not in text
+
+
+def test_drive_units_two_in_a_scenario_is_the_documented_error(tmp_path: Path) -> None:
+    result = run_scenario(load_scenario(_scenario(tmp_path, "2"), SPEC), SPEC)
+    assert result.passed, result.mismatches

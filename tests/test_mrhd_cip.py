@@ -4,7 +4,11 @@ hypothesis exploration, and bad operand input.
 Written from 000 (MRHD): Hookup Test Status values 0-6, .IP set on the rising rung and
 cleared when the test ends, PC and DN set with IP cleared, and the extended errors 1,
 12 and 16 under Servo Message Failure (12); the error codes chosen where 000 is silent
-are those of INT-049.
+are those of INT-049, and those of an axis that cannot run a test at all (inhibited,
+ungrouped, without a drive, still initializing or waiting for its motion group) are
+those of INT-042 and INT-060.  Every status value, every error and every precondition
+failure must be produced both by a hand-written scenario under ``scenarios/mrhd/`` and
+by hypothesis exploration.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, find, given, settings, strategies as st
+from hypothesis import HealthCheck, Phase, find, given, settings, strategies as st
 
 try:
     import statecharts  # noqa: F401
@@ -25,7 +29,7 @@ from statecharts.diagnostics import ScenarioError
 from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
-from statecharts.scenario import load_scenario
+from statecharts.scenario import load_scenario, run_scenario, scenario_files
 
 SPEC = load_spec()
 #: a 500 ms coarse update makes the 2 s time-out four updates long
@@ -33,6 +37,29 @@ SCAN_MS = COARSE_MS = 500
 TAGS = ("mrhd", "msf", "masd", "mafr", "masr", "mso")
 ENV = ("test_moved_positive", "test_moved_negative", "marker_detected", "test_no_counts",
        "axis_fault", "safety_fault", "start_inhibit_set", "start_inhibit_cleared", "connection_loss")
+#: The wider exploration adds the drive's Shutdown fault action and the events that let
+#: an axis that is not yet operational move on.
+ENV_WIDE = (*ENV, "shutdown_fault_action", "group_synchronized", "uninhibit", "group_assigned",
+            "device_associated", "connection_established", "dc_bus_up")
+MRHD_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "mrhd"
+#: Exploration looks for one example; shrinking it would only cost time.
+FIND_SETTINGS = settings(max_examples=5000, database=None, deadline=None, phases=[Phase.explicit, Phase.generate])
+
+#: What a start state of the wider exploration needs besides a connection and a DC bus
+#: to stay in that state.
+START_VARIABLES: dict[str, dict[str, object]] = {
+    "Shutdown": {"ShutdownRequested": True},
+    "PreCharge": {"DCBusUp": False},
+    "AxisInhibited": {"Inhibited": True, "Connected": False},
+    "NotGrouped": {"Grouped": False, "Connected": False},
+    "NoDevice": {"DeviceAssociated": False, "Connected": False},
+    "Initializing": {"Connected": False},
+    "WaitingForGroup": {"GroupSynchronized": False},
+    "Faulted": {"MajorFault": True, "PhysicalAxisFault": True},
+    "Aborting": {"MajorFault": True, "PhysicalAxisFault": True, "StoppingUpdates": 2, "Timer": 2},
+    "StartInhibited": {"StartInhibit": True},
+    "Testing": {"TestRequested": True},
+}
 
 
 def _system(start: str, variables: dict[str, object]) -> System:
@@ -45,17 +72,38 @@ def _system(start: str, variables: dict[str, object]) -> System:
     return System(SPEC, [axis], program, scan_ms=SCAN_MS, coarse_update_ms=COARSE_MS)
 
 
+_IDLE = st.tuples(st.just("idle"), st.just(""), st.just(True))
 _STEP = st.one_of(
     st.tuples(st.just("rung"), st.sampled_from(TAGS), st.booleans()),
     st.tuples(st.just("event"), st.sampled_from(ENV), st.just(True)),
-    st.tuples(st.just("idle"), st.just(""), st.just(True)),
+    _IDLE, _IDLE,
 )
+_STEP_WIDE = st.one_of(
+    st.tuples(st.just("rung"), st.sampled_from(TAGS), st.booleans()),
+    st.tuples(st.just("event"), st.sampled_from(ENV_WIDE), st.just(True)),
+    _IDLE, _IDLE,
+)
+#: Every state an MRHD can meet, each set up so that it holds (START_VARIABLES).
+_RUN_WIDE = st.fixed_dictionaries({
+    "wide": st.just(True),
+    "start": st.sampled_from(["Stopped", "Running", "Shutdown", "PreCharge", "AxisInhibited", "NotGrouped",
+                              "NoDevice", "Initializing", "WaitingForGroup", "Faulted", "Aborting",
+                              "StartInhibited", "Testing"]),
+    "test": st.sampled_from([0, 1, 2, 3, 7]),
+    "channel": st.sampled_from([1, 2]),
+    "motor": st.sampled_from(["PM", "Induction"]),
+    "feedback_only": st.sampled_from([False, False, False, True]),
+    "pre_event": st.sampled_from([None, None, *ENV_WIDE]),
+    "lead": st.booleans(),
+    "steps": st.lists(_STEP_WIDE, max_size=10),
+})
 _RUN = st.fixed_dictionaries({
     "start": st.sampled_from(["Stopped", "Stopped", "Running", "Shutdown", "PreCharge"]),
     "test": st.sampled_from([0, 1, 2, 3, 7]),
     "channel": st.sampled_from([1, 2]),
     "motor": st.sampled_from(["PM", "Induction"]),
     "feedback_only": st.sampled_from([False, False, False, True]),
+    "lead": st.booleans(),
     "steps": st.lists(_STEP, max_size=14),
 })
 
@@ -64,13 +112,19 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
     variables: dict[str, object] = {"HookupTestFeedbackChannel": run["channel"], "MotorType": run["motor"]}
     if run["feedback_only"]:
         variables["AxisConfiguration"] = "FeedbackOnly"
-    if run["start"] == "Shutdown":
+    if run.get("wide"):
+        variables.update(START_VARIABLES.get(str(run["start"]), {}))
+    elif run["start"] == "Shutdown":
         variables["ShutdownRequested"] = True
     system = _system(str(run["start"]), variables)
     system.tags["mrhd"].operands.update({"DiagnosticTest": run["test"]})
     rungs = {t: False for t in TAGS}
     seen = []
-    for kind, name, value in run["steps"]:  # type: ignore[attr-defined]
+    # a run may start with one environment event, then the MRHD rung going true, so that
+    # the exploration meets the interesting cases often enough
+    lead = [("event", run["pre_event"], True)] if run.get("pre_event") else []
+    lead += [("rung", "mrhd", True)] if run.get("lead") else []
+    for kind, name, value in [*lead, *run["steps"]]:  # type: ignore[misc]
         events: tuple[EnvironmentEvent, ...] = ()
         if kind == "rung":
             rungs[name] = value
@@ -92,7 +146,7 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
 
 
 @settings(suppress_health_check=[HealthCheck.too_slow])
-@given(run=_RUN)
+@given(run=st.one_of(_RUN, _RUN_WIDE))
 def test_test_status_is_one_exactly_while_in_process(run: dict[str, object]) -> None:
     _run(run, check_law=True)
 
@@ -107,14 +161,93 @@ def _final(run: dict[str, object]) -> tuple[dict[str, object], dict[str, object]
 @pytest.mark.parametrize("status", range(7))
 def test_every_hookup_test_status_is_found_by_exploration(status: int) -> None:
     found = find(_RUN, lambda r: _final(r)[0].get("HookupTestStatus") == status,
-                 settings=settings(max_examples=5000, database=None, deadline=None))
+                 settings=FIND_SETTINGS)
     assert _final(found)[0]["HookupTestStatus"] == status
 
 
 @pytest.mark.parametrize("err, exerr", [(12, 1), (12, 12), (12, 16), (13, 2), (8, 0), (15, 0), (20, 0)])
 def test_every_mrhd_error_is_found_by_exploration(err: int, exerr: int) -> None:
     found = find(_RUN, lambda r: (lambda t: t.get("ER") and t.get("ERR") == err and t.get("EXERR") == exerr)(_final(r)[1]),
-                 settings=settings(max_examples=5000, database=None, deadline=None))
+                 settings=FIND_SETTINGS)
+    assert _final(found)[1]["ERR"] == err
+
+
+#: Each precondition failure as (axis state when MRHD executes, ERR, EXERR), written from
+#: 000 (Test Status paragraph, extended errors 12 and 16, Diagnostic Test 0-3,
+#: commutation only for a PM motor) and INT-049, INT-042, INT-060.
+PRECONDITION_FAILURES = {
+    ("Running", 12, 16): "not Stopped (Device in wrong state)",
+    ("PreCharge", 12, 16): "not Stopped (Device in wrong state)",
+    ("Shutdown", 12, 12): "Shutdown (Object Mode conflict)",
+    ("Stopped", 13, 2): "Diagnostic Test outside 0-3 (third operand)",
+    ("Stopped", 8, 0): "commutation test on an induction motor",
+    ("Running", 8, 0): "feedback-only axis",
+    ("Faulted", 20, 0): "faulted",
+    ("Aborting", 20, 0): "aborting a major fault",
+    ("Stopped", 20, 0): "safety fault latched",
+    ("AxisInhibited", 53, 0): "inhibited",
+    ("NotGrouped", 11, 0): "no motion group",
+    ("NoDevice", 11, 0): "no drive",
+    ("Initializing", 82, 0): "waiting for its connection",
+    ("WaitingForGroup", 82, 0): "waiting for its motion group",
+}
+
+
+def _scenario_outcomes() -> tuple[set[int], set[tuple[int, int]], set[tuple[str, int, int]]]:
+    """Hookup Test Status values, MRHD (ERR, EXERR) pairs, and (axis state, ERR, EXERR)
+    when an MRHD tag's ER rises, over every scenario under scenarios/mrhd/."""
+    statuses: set[int] = set()
+    errors: set[tuple[int, int]] = set()
+    refusals: set[tuple[str, int, int]] = set()
+    for path in scenario_files([MRHD_DIR]):
+        scenario = load_scenario(path, SPEC)
+        result = run_scenario(scenario, SPEC)
+        assert result.passed, f"{path.name}: " + "; ".join(str(m) for m in result.mismatches)
+        axis_of = {p.tag: p.axis for p in scenario.program if p.instruction == "MRHD"}
+        er_before = {t: False for t in axis_of}
+        for row in result.rows:
+            obs = row.record.observations
+            for a in scenario.axes:
+                if a.chart == "AxisCIP":
+                    statuses.add(int(obs[a.name]["HookupTestStatus"]))  # type: ignore[call-overload]
+            for tag, axis in axis_of.items():
+                t = obs[tag]
+                if t["ER"]:
+                    errors.add((int(t["ERR"]), int(t["EXERR"])))  # type: ignore[call-overload]
+                    if not er_before[tag]:
+                        refusals.add((str(obs[axis]["state"]), int(t["ERR"]), int(t["EXERR"])))  # type: ignore[call-overload]
+                er_before[tag] = bool(t["ER"])
+    return statuses, errors, refusals
+
+
+def test_scenarios_produce_every_status_error_and_precondition_failure() -> None:
+    statuses, errors, refusals = _scenario_outcomes()
+    assert set(range(7)) <= statuses, f"Hookup Test Status values no scenario shows: {set(range(7)) - statuses}"
+    # 000: extended errors 1, 12, 16 under Servo Message Failure (12); INT-049: 15 for a failed test
+    wanted = {(12, 1), (12, 12), (12, 16), (15, 0)}
+    assert wanted <= errors, f"MRHD errors no scenario produces: {wanted - errors}"
+    missing = {k: v for k, v in PRECONDITION_FAILURES.items() if k not in refusals}
+    assert not missing, f"precondition failures no scenario produces: {missing}"
+
+
+@pytest.mark.parametrize("state, err, exerr", sorted(PRECONDITION_FAILURES), ids=lambda v: str(v))
+def test_every_precondition_failure_is_found_by_exploration(state: str, err: int, exerr: int) -> None:
+    def refused_there(r: dict[str, object]) -> bool:
+        seen = _run(r)
+        for before, after in zip([None, *seen], seen):
+            t, was = after["mrhd"], (before or {}).get("mrhd", {"ER": False})
+            if t["ER"] and not was["ER"] and (t["ERR"], t["EXERR"]) == (err, exerr) and after["A"]["state"] == state:
+                return True
+        return False
+
+    found = find(_RUN_WIDE, refused_there, settings=FIND_SETTINGS)
+    assert refused_there(found)
+
+
+@pytest.mark.parametrize("err", [53, 11, 82])
+def test_errors_of_an_axis_not_yet_operational_are_found_by_exploration(err: int) -> None:
+    found = find(_RUN_WIDE, lambda r: (lambda t: t.get("ER") and t.get("ERR") == err)(_final(r)[1]),
+                 settings=FIND_SETTINGS)
     assert _final(found)[1]["ERR"] == err
 
 
@@ -132,5 +265,10 @@ def test_unknown_diagnostic_test_text_is_a_clear_scenario_error(tmp_path: Path) 
 
 
 def test_mrhd_variants() -> None:
-    assert [i.id for i in SPEC.variants("MRHD")] == ["MRHD"]
-    assert isinstance(SPEC.instruction("MRHD", "AxisCIP"), ir.Instruction)
+    # The CIP variant is MRHD; a servo-axis variant (MRHD_SERVO, added for AxisNonCIP by
+    # the servo work) may exist beside it, but no other variant may claim the CIP chart.
+    ids = [i.id for i in SPEC.variants("MRHD")]
+    assert ids[0] == "MRHD"
+    cip = SPEC.instruction("MRHD", "AxisCIP")
+    assert isinstance(cip, ir.Instruction) and cip.id == "MRHD"
+    assert [i.id for i in SPEC.variants("MRHD") if "AxisCIP" in i.charts] == ["MRHD"]

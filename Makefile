@@ -34,6 +34,7 @@ check: install
 	@$(BIN)/motionchart validate
 	@$(BIN)/motionchart simulate --summary scenarios
 	@$(BIN)/motionchart check
+	@$(BIN)/motionchart check --system aoi
 
 test: install
 	@$(BIN)/python -m pytest
@@ -49,6 +50,8 @@ bench: install
 # Longer property-based runs than CI affords.
 deep: install
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
+	@$(BIN)/motionchart check --system cip
+	@$(BIN)/motionchart check --system aoi --max-changes 3
 
 lint: install
 	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true

@@ -50,6 +50,8 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=f"a bundled system name or a system file (default: {DEFAULT_SYSTEM}; --list-systems lists them)")
     p.add_argument("--list-systems", action="store_true", help="list the bundled systems and exit")
     p.add_argument("--axes", type=_positive_int, metavar="N", help="use N axes in every axis group of the system")
+    p.add_argument("--max-changes", type=_positive_int, metavar="N",
+                   help="add-on instruction systems: allow N input/environment changes per run (default: the system's)")
     p.add_argument("--max-states", type=_positive_int, metavar="N", help="stop (incomplete) after N states")
     p.add_argument("--max-seconds", type=_positive_float, metavar="S", help="stop (incomplete) after S seconds")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -83,7 +85,8 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
             if not p or not Path(p).exists():
                 print(f"motionchart check: no such file or directory: {p!r}", file=sys.stderr)
                 return EXIT_USAGE
-    systems = bundled_systems()
+    from checker.aoi_check import bundled_aoi_systems
+    systems = {**bundled_systems(), **bundled_aoi_systems()}
     if args.list_systems:
         for name, path in systems.items():
             out.write(f"{name}\t{path}\n")
@@ -95,6 +98,20 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
     else:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
               "(or give a system file)", file=sys.stderr)
+        return EXIT_USAGE
+    from checker.aoi_check import is_aoi_system
+    if is_aoi_system(system_path):
+        from checker import aoi_check
+        unsupported = [f"--{o.replace('_', '-')}" for o in ("axes", "graphml", "properties")
+                       if getattr(args, o, None)] + (["--no-symmetry"] if args.no_symmetry else [])
+        if unsupported:
+            print(f"motionchart check: {', '.join(unsupported)} do(es) not apply to the add-on instruction "
+                  f"system {args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
+        return aoi_check.run(system_path, args, out)
+    if args.max_changes is not None:
+        print(f"motionchart check: --max-changes applies to add-on instruction systems only, not {args.system!r}",
+              file=sys.stderr)
         return EXIT_USAGE
     try:
         spec = load_spec(args.spec)

@@ -3,7 +3,9 @@
 Pipeline position: ``spec/aoi/*.yaml`` (``format: motionchart-aoi/1``) and
 ``spec/instructions/motion/*.yaml`` (``format: motionchart-subinstruction/1``) ->
 **this module** (schema + expression checks -> frozen :class:`AoiSpec`) -> :class:`World`
-(device handlers, a physical and a path axis, AOI instances, one PLC scan at a time) ->
+(device handlers on the DeviceHandler chart, a physical axis on AxisCIP and a path
+axis on AxisVirtual, run by the engine through the spec's `world:` bindings, the motion
+planner's numbers, AOI instances, one PLC scan at a time) ->
 scenarios of ``format: motionchart-aoi-scenario/1`` (run by ``motionchart simulate``
 through :mod:`statecharts.scenario`).  The main spec loader skips these formats.
 
@@ -11,7 +13,7 @@ Per scan and per AOI instance, in program order: registration with the handler n
 Ref_Handle (if not yet registered); then the prescan routine, the rung-false routine, or
 the rung-true logic (a new execution runs the ordered checks, then the recovery chart's
 states issue sub-instruction calls); then the motion update advances the axes and the
-calls in process.  See docs/aoi.md and INT-021..INT-030.
+calls in process.  See docs/aoi.md, INT-021..INT-030, INT-046 and INT-065..INT-070.
 """
 
 from __future__ import annotations
@@ -54,7 +56,7 @@ AOI_SCHEMA: dict[str, Any] = {
     **_obj(["format", "aoi"], {
         "format": {"const": AOI_FORMAT},
         "aoi": _obj(["id", "source", "execution", "inputs", "outputs", "errors", "checks", "recovery", "on_done",
-                     "rung_false", "prescan"], {
+                     "rung_false", "prescan", "world"], {
             "id": _ID, **_PROV, "execution": {"enum": ["level", "edge"]}, "execution_source": _SOURCE,
             "inputs": {"type": "array", "items": _obj(["name", "type", "source"], {
                 "name": _ID, "type": {"enum": ["axis", "handle", "BOOL", "DINT", "REAL"]}, "data_type": _ID,
@@ -81,6 +83,24 @@ AOI_SCHEMA: dict[str, Any] = {
                 "clear": {"type": "array", "items": _ID}, "abort_call": _ID, **_PROV}),
             "prescan": _obj(["clear", "source"], {
                 "clear": {"type": "array", "items": _ID}, "forget": {"type": "array", "items": _ID}, **_PROV}),
+            "world": _obj(["objects", "source"], {
+                **_PROV,
+                "objects": {"type": "array", "minItems": 1, "items": _obj(["kind", "chart", "facts", "source"], {
+                    "kind": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL", "handler"]}, "chart": _ID, **_PROV,
+                    "on_scan": {"type": "array", "items": _ID}, "stop": {"type": "array", "items": _ID},
+                    "register": {"type": "array", "items": _ID},
+                    "setup": _obj(["rules"], {
+                        "variables": {"type": "object", "additionalProperties": _EXPR},
+                        "rules": {"type": "array", "items": _obj(["when"], {
+                            "when": _EXPR, "state": _ID,
+                            "variables": {"type": "object", "additionalProperties": _EXPR}})},
+                        "then_set": {"type": "array", "items": _ID}}),
+                    "facts": {"type": "array", "items": _obj(["name", "source"], {
+                        "name": _ID, "when": _EXPR, "variable": _ID, **_PROV,
+                        "set": {"type": "array", "items": _obj(["value", "fire"], {
+                            "value": _SCALAR, "fire": {"type": "array", "minItems": 1, "items": _ID}})}})},
+                })},
+            }),
         }),
     }),
 }
@@ -117,6 +137,12 @@ _HANDLER_PROPS = {
     "mode": {"enum": ["physical", "virtual", "none", "maintenance"]},
     "phy_axis": _ID, "pth_axis": _ID, "OnPath": {"type": "boolean"},
 }
+_CHART_SETUP = {
+    "state": {**_ID, "description": "start the chart in this state instead of the one the fields give"},
+    "variables": {"type": "object", "propertyNames": _ID, "additionalProperties": _SCALAR,
+                  "description": "chart variables, applied after the state's entry actions"},
+    "events": {"type": "array", "items": _ID, "description": "chart events fired after the set-up, in order"},
+}
 _INPUT_VALUES = {"type": ["boolean", "integer", "number", "string"]}
 SCENARIO_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
@@ -129,9 +155,9 @@ SCENARIO_SCHEMA: dict[str, Any] = {
         "setup": _obj(["handlers", "axes", "aoi"], {
             "scan_ms": {"type": "integer", "minimum": 1},
             "handlers": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                         "additionalProperties": _obj(["id"], _HANDLER_PROPS)},
+                         "additionalProperties": _obj(["id"], {**_HANDLER_PROPS, **_CHART_SETUP})},
             "axes": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                     "additionalProperties": _obj(["type"], _AXIS_PROPS)},
+                     "additionalProperties": _obj(["type"], {**_AXIS_PROPS, **_CHART_SETUP})},
             "aoi": {"type": "object", "minProperties": 1, "propertyNames": _ID,
                     "additionalProperties": {"type": "object", "propertyNames": _ID,
                                              "additionalProperties": _INPUT_VALUES}},
@@ -142,6 +168,7 @@ SCENARIO_SCHEMA: dict[str, Any] = {
             "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
             "operands": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _INPUT_VALUES}},
             "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
+            "events": {"type": "object", "additionalProperties": {"type": "array", "minItems": 1, "items": _ID}},
             "expect": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
         })},
     }),
@@ -211,6 +238,37 @@ class SubInstruction:
 
 
 @dataclass(frozen=True, slots=True)
+class FactBinding:
+    """One fact of a world object read from its chart (``when`` or ``variable``) and how it is set."""
+    name: str
+    when: Expr | None
+    variable: str | None
+    sets: tuple[tuple[object, tuple[str, ...]], ...]  # (value, chart events to fire)
+    source: str
+    interpretation: str | None
+
+
+@dataclass(frozen=True, slots=True)
+class ObjectBinding:
+    """How the objects of one kind (an axis data type, or the handler) are run by a chart."""
+    kind: str
+    chart: str
+    facts: tuple[FactBinding, ...]
+    on_scan: tuple[str, ...]
+    stop: tuple[str, ...]
+    register: tuple[str, ...]
+    source: str
+    #: set-up: chart variables from the scenario's fields, ordered rules (when, state,
+    #: variables), then the facts given their value through `set`
+    setup_variables: tuple[tuple[str, Expr], ...] = ()
+    setup_rules: tuple[tuple[Expr, str | None, tuple[tuple[str, Expr], ...]], ...] = ()
+    then_set: tuple[str, ...] = ()
+
+    def fact(self, name: str) -> FactBinding | None:
+        return next((f for f in self.facts if f.name == name), None)
+
+
+@dataclass(frozen=True, slots=True)
 class AoiSpec:
     id: str
     inputs: tuple[tuple[str, str, object], ...]  # (name, type, default)
@@ -226,6 +284,12 @@ class AoiSpec:
     prescan_clear: tuple[str, ...]
     prescan_forget: tuple[str, ...]
     instructions: tuple[SubInstruction, ...]
+    bindings: tuple[ObjectBinding, ...] = ()
+    #: the spec directory the charts of the world come from (None: the bundled spec)
+    spec_dir: str | None = field(default=None, compare=False)
+
+    def binding(self, kind: str) -> ObjectBinding:
+        return next(b for b in self.bindings if b.kind == kind)
 
     def state(self, sid: str) -> RecoveryState:
         return next(s for s in self.states if s.id == sid)
@@ -371,6 +435,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     abort = d["rung_false"].get("abort_call")
     if abort is not None and abort not in mnemonics:
         errors.append(Diagnostic(f, 1, 1, "aoi.rung_false.abort_call", f"unknown sub-instruction {abort!r}"))
+    bindings = _load_bindings(f, tree, d["world"], None if spec_dir is None else str(spec_dir), errors)
     if errors:
         raise SpecError(errors)
     return AoiSpec(
@@ -379,48 +444,390 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         initial=d["recovery"]["initial"], states=tuple(states), transitions=tuple(transitions),
         on_done=tuple(on_done), rung_false_clear=tuple(d["rung_false"]["clear"]), abort_call=abort,
         prescan_clear=tuple(d["prescan"]["clear"]), prescan_forget=tuple(d["prescan"].get("forget", [])),
-        instructions=tuple(subs),
+        instructions=tuple(subs), bindings=bindings, spec_dir=None if spec_dir is None else str(spec_dir),
     )
+
+
+#: The facts the world reads from every object of a kind (the others are the planner's).
+REQUIRED_FACTS: dict[str, frozenset[str]] = {
+    "AXIS_CIP_DRIVE": frozenset({"faulted", "shutdown", "energized", "tracking", "starting"}),
+    "AXIS_VIRTUAL": frozenset({"faulted", "shutdown", "energized", "tracking", "starting"}),
+    "handler": frozenset({"eState", "mode", "OnPath", "registered", "capacity"}),
+}
+#: Facts an object may have besides the required ones.
+OPTIONAL_FACTS: dict[str, frozenset[str]] = {
+    "AXIS_CIP_DRIVE": frozenset({"homed", "homing", "direct_control", "moving"}),
+    "AXIS_VIRTUAL": frozenset({"homed", "homing", "direct_control", "moving"}),
+    "handler": frozenset({"running"}),
+}
+
+
+@functools.lru_cache(maxsize=4)
+def main_spec(spec_dir: str | None = None) -> Any:
+    """The main spec whose charts run the world: ``spec_dir``'s when it has charts, else the bundled one."""
+    from statecharts.loader import load_spec
+    if spec_dir is not None and (Path(spec_dir) / "charts").is_dir():
+        return load_spec([spec_dir])
+    return load_spec()
+
+
+def _load_bindings(f: str, tree: Any, world: Mapping[str, Any], spec_dir: str | None,
+                   errors: list[Diagnostic]) -> tuple[ObjectBinding, ...]:
+    """The `world` section: every chart, variable, event and fact name checked against the charts."""
+    def err(parts: tuple[Any, ...], message: str) -> None:
+        line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
+        errors.append(Diagnostic(f, line, col, node_path(parts), message))
+
+    try:
+        charts = {c.id: c for c in main_spec(spec_dir).charts}
+    except SpecError as exc:
+        err(("aoi", "world"), f"the charts of the world cannot be loaded: {exc.diagnostics[0]}")
+        return ()
+    out: list[ObjectBinding] = []
+    kinds: set[str] = set()
+    for i, o in enumerate(world["objects"]):
+        p: tuple[Any, ...] = ("aoi", "world", "objects", i)
+        if o["kind"] in kinds:
+            err((*p, "kind"), f"a second binding for {o['kind']}")
+        kinds.add(o["kind"])
+        chart = charts.get(o["chart"])
+        if chart is None:
+            err((*p, "chart"), f"unknown chart {o['chart']!r}; charts: {', '.join(sorted(charts))}")
+            continue
+        if any(st.kind.value == "history" for st in chart.states):
+            err((*p, "chart"), f"chart {chart.id} has history states; the world restores charts from snapshots, "
+                               "which do not hold history")
+        variables = {v.name for v in chart.variables}
+        events = {e.name for e in chart.events}
+        names = frozenset(variables | {"active", "state"})
+        for key in ("on_scan", "stop", "register"):
+            for j, ev in enumerate(o.get(key, [])):
+                if ev not in events:
+                    err((*p, key, j), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
+        facts: list[FactBinding] = []
+        allowed = REQUIRED_FACTS[o["kind"]] | OPTIONAL_FACTS[o["kind"]]
+        for j, fb in enumerate(o["facts"]):
+            q = (*p, "facts", j)
+            if fb["name"] not in allowed:
+                err((*q, "name"), f"{o['kind']} has no fact {fb['name']!r}; facts: {', '.join(sorted(allowed))}")
+            if ("when" in fb) == ("variable" in fb):
+                err(q, "a fact needs exactly one of `when` (an expression) and `variable` (a chart variable)")
+                continue
+            when = None
+            if "when" in fb:
+                when = _exprs(f, tree, (*q, "when"), fb["when"], names, errors)
+                if when is None:
+                    continue
+            elif fb["variable"] not in variables:
+                err((*q, "variable"), f"chart {chart.id} has no variable {fb['variable']!r}")
+                continue
+            sets = []
+            for k, sv in enumerate(fb.get("set", [])):
+                for m, ev in enumerate(sv["fire"]):
+                    if ev not in events:
+                        err((*q, "set", k, "fire", m), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
+                sets.append((sv["value"], tuple(sv["fire"])))
+            facts.append(FactBinding(fb["name"], when, fb.get("variable"), tuple(sets), fb["source"],
+                                     fb.get("interpretation")))
+        missing = REQUIRED_FACTS[o["kind"]] - {fb["name"] for fb in o["facts"]}
+        if missing:
+            err((*p, "facts"), f"{o['kind']} needs the fact(s) {', '.join(sorted(missing))}")
+        fields = frozenset(_HANDLER_PROPS if o["kind"] == "handler" else _AXIS_PROPS)
+        states = {st.id for st in chart.states}
+
+        def assignments(node: Mapping[str, str], parts: tuple[Any, ...]) -> tuple[tuple[str, Expr], ...]:
+            got = []
+            for name, text in node.items():
+                if name not in variables:
+                    err((*parts, name), f"chart {chart.id} has no variable {name!r}")
+                    continue
+                e = _exprs(f, tree, (*parts, name), text, fields, errors)
+                if e is not None:
+                    got.append((name, e))
+            return tuple(got)
+
+        su = o.get("setup", {"rules": []})
+        base = assignments(su.get("variables", {}), (*p, "setup", "variables"))
+        rules = []
+        for j, r in enumerate(su["rules"]):
+            q = (*p, "setup", "rules", j)
+            if "state" in r and r["state"] not in states:
+                err((*q, "state"), f"chart {chart.id} has no state {r['state']!r}")
+            e = _exprs(f, tree, (*q, "when"), r["when"], fields, errors)
+            if e is not None:
+                rules.append((e, r.get("state"), assignments(r.get("variables", {}), (*q, "variables"))))
+        for j, name in enumerate(su.get("then_set", [])):
+            if name not in {fb.name for fb in facts}:
+                err((*p, "setup", "then_set", j), f"{name!r} is not a fact of {o['kind']}")
+        out.append(ObjectBinding(o["kind"], chart.id, tuple(facts), tuple(o.get("on_scan", [])),
+                                 tuple(o.get("stop", [])), tuple(o.get("register", [])), o["source"],
+                                 base, tuple(rules), tuple(su.get("then_set", []))))
+    for need in REQUIRED_FACTS:
+        if need not in kinds:
+            err(("aoi", "world", "objects"), f"the world needs a binding for {need}")
+    return tuple(out)
 
 
 # --------------------------------------------------------------------------- world
 
+Snap = tuple[frozenset[str], tuple[object, ...]]
 
-@dataclass
-class Axis:
-    name: str
-    type: str = "AXIS_CIP_DRIVE"
-    position: float = 0.0
-    velocity: float = 0.0
-    unwind: float = 0.0
-    homed: bool = True
-    energized: bool = True
-    faulted: bool = False
-    shutdown: bool = False
-    control_mode: str = "position"
-    direct_control: bool = False
-    home_config_ok: bool = True
-    home_position: float = 0.0
-    homing: bool = False
-    geared: bool = False
-    master: str | None = None
-    # motion in process (MAM): remaining signed distance and speed
-    move_remaining: float = 0.0
-    move_speed: float = 0.0
-    home_scans_left: int = 0
+
+class ChartRunner:
+    """Runs one chart of the main spec for every world object of that chart.
+
+    A world object keeps its chart's configuration as a snapshot of the engine
+    (:meth:`statecharts.engine.AxisInstance.snapshot`: active states, variable values).
+    To fire an event the runner restores that snapshot into an engine
+    :class:`~statecharts.engine.AxisInstance` of the chart, lets the engine run the
+    event (its actions first for environment events, then python-statemachine's
+    macrostep) and takes the snapshot again.  The engine is deterministic and the
+    charts have no history states (the loader refuses them), so a snapshot and an
+    event determine the next snapshot: results are memoised, which makes building
+    thousands of worlds and exploring them affordable.
+    """
+
+    MEMO_LIMIT = 100_000
+
+    def __init__(self, chart: Any, parameters: Mapping[str, int]) -> None:
+        self.chart = chart
+        self.parameters = dict(parameters)
+        self.index = {v.name: i for i, v in enumerate(chart.variables)}
+        self.events = frozenset(e.name for e in chart.events)
+        self._leaves = tuple((st.id, st.value) for st in chart.leaf_states())
+        self._inst: Any = None
+        self._memo: dict[tuple[object, ...], Snap] = {}
+        self._facts: dict[tuple[int, Snap], dict[str, object]] = {}
+
+    def _engine(self) -> Any:
+        from statecharts.engine import AxisInstance
+        if self._inst is None:
+            self._inst = AxisInstance(self.chart, self.chart.id, parameters=self.parameters)
+        return self._inst
+
+    def _remember(self, key: tuple[object, ...], snap: Snap) -> Snap:
+        if len(self._memo) >= self.MEMO_LIMIT:
+            self._memo.clear()
+        self._memo[key] = snap
+        return snap
+
+    def initial(self, state: str | None, variables: Mapping[str, object]) -> Snap:
+        """The snapshot of a fresh instance: in ``state`` (or the chart's initial state) with ``variables``."""
+        from statecharts.engine import AxisInstance
+        key = ("initial", state, tuple(sorted(variables.items())))
+        hit = self._memo.get(key)
+        if hit is not None:
+            return hit
+        inst = AxisInstance(self.chart, self.chart.id, state=state, variables=variables, parameters=self.parameters)
+        return self._remember(key, inst.snapshot())
+
+    def send(self, snap: Snap, event: str) -> Snap:
+        key = (snap, event)
+        hit = self._memo.get(key)
+        if hit is not None:
+            return hit
+        inst = self._engine()
+        inst.restore(snap)
+        inst.apply_event_actions(event)
+        inst.send(event)
+        return self._remember(key, inst.snapshot())
+
+    def assign(self, snap: Snap, name: str, value: object) -> Snap:
+        """Give one variable a value, then let the eventless transitions it enables run."""
+        from statecharts.engine import SETTLE_EVENT
+        values = list(snap[1])
+        values[self.index[name]] = value
+        return self.send((snap[0], tuple(values)), SETTLE_EVENT)
+
+    def leaf(self, active: frozenset[str]) -> tuple[str, int | None]:
+        return next((sid, value) for sid, value in self._leaves if sid in active)
+
+    def facts(self, binding: ObjectBinding, snap: Snap) -> dict[str, object]:
+        """Every fact of ``binding`` on the configuration ``snap``."""
+        key = (id(binding), snap)
+        hit = self._facts.get(key)
+        if hit is not None:
+            return hit
+        env: dict[str, object] = {v.name: snap[1][i] for i, v in enumerate(self.chart.variables)}
+        env["active"] = snap[0]
+        env["state"] = self.leaf(snap[0])[0]
+        out = {fb.name: (fb.when(env) if fb.when is not None else env[fb.variable])  # type: ignore[index]
+               for fb in binding.facts}
+        if len(self._facts) >= self.MEMO_LIMIT:
+            self._facts.clear()
+        self._facts[key] = out
+        return out
+
+
+_RUNNERS: dict[tuple[int, tuple[tuple[str, int], ...]], ChartRunner] = {}
+
+
+def chart_runner(chart: Any, scan_ms: int) -> ChartRunner:
+    """The runner of ``chart`` for a world with scan (and coarse-update) period ``scan_ms``."""
+    params = (("coarse_update_ms", scan_ms), ("scan_ms", scan_ms))
+    key = (id(chart), params)
+    runner = _RUNNERS.get(key)
+    if runner is None or runner.chart is not chart:
+        runner = _RUNNERS[key] = ChartRunner(chart, dict(params))
+    return runner
+
+
+class ChartObject:
+    """A world object run by a chart: its binding, its runner and its current snapshot."""
+
+    #: facts kept by the object itself when its binding does not read them from the chart
+    PLAIN: dict[str, object] = {}
+
+    def __init__(self, name: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
+        self.name = name
+        self.binding = binding
+        self.runner = runner
+        self.snap = snap
+        self.plain: dict[str, object] = {k: v for k, v in self.PLAIN.items() if binding.fact(k) is None}
+
+    # -- the chart ------------------------------------------------------------------
+    @property
+    def chart_state(self) -> str:
+        """The active leaf state (the first region's, for a chart with parallel regions)."""
+        return self.runner.leaf(self.snap[0])[0]
+
+    @property
+    def chart_value(self) -> int | None:
+        return self.runner.leaf(self.snap[0])[1]
+
+    @property
+    def active(self) -> frozenset[str]:
+        return self.snap[0]
+
+    def variable(self, name: str) -> object:
+        return self.snap[1][self.runner.index[name]]
+
+    def fire(self, event: str) -> None:
+        """Send one event of the chart (environment actions first, as the main engine does)."""
+        if event not in self.runner.events:
+            raise ValueError(f"chart {self.runner.chart.id} has no event {event!r}; "
+                             f"events: {', '.join(sorted(self.runner.events))}")
+        self.snap = self.runner.send(self.snap, event)
+        self._after_chart()
+
+    def _after_chart(self) -> None:
+        """Hook: the planner obeys what the chart did."""
+
+    # -- facts ------------------------------------------------------------------------
+    def fact(self, name: str) -> object:
+        if name in self.plain:
+            return self.plain[name]
+        return self.runner.facts(self.binding, self.snap)[name]
+
+    def set_fact(self, name: str, value: object) -> None:
+        """Give a fact a value the way the binding says: fire its events or assign its variable.
+
+        Nothing happens when the fact already has the value; the chart may refuse an
+        event (an Enable on a Faulted axis is ignored), and then the fact keeps its value.
+        """
+        if name in self.plain:
+            self.plain[name] = value
+            return
+        fb = self.binding.fact(name)
+        if fb is None:
+            raise KeyError(f"{self.name} has no fact {name!r}")
+        if self.fact(name) == value:
+            return
+        if fb.variable is not None:
+            self.snap = self.runner.assign(self.snap, fb.variable, value)
+            self._after_chart()
+            return
+        for v, events in fb.sets:
+            if v == value and type(v) is type(value):
+                for e in events:
+                    self.fire(e)
+                return
+        raise ValueError(f"{self.name}.{name} is read from chart {self.binding.chart} and cannot be set to {value!r}")
+
+
+class Axis(ChartObject):
+    """An axis: its chart (AxisCIP or AxisVirtual) and the motion planner's numbers.
+
+    Positions, velocities, the move, homing and gearing in process, and configuration
+    (unwind, control mode, home position, ...) are the planner's; the state-like facts
+    (faulted, shut down, energized, ...) come from the chart through the binding.
+    """
+
+    PLAIN = {"homed": True, "homing": False, "direct_control": False}
+
+    def __init__(self, name: str, type: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
+        super().__init__(name, binding, runner, snap)
+        self.type = type
+        self.position = 0.0
+        self._velocity = 0.0
+        self.unwind = 0.0
+        self.control_mode = "position"
+        self.home_config_ok = True
+        self.home_position = 0.0
+        self.geared = False
+        self.master: str | None = None
+        # motion in process (MAM): remaining signed distance and speed; homing by MAH
+        self.move_remaining = 0.0
+        self.move_speed = 0.0
+        self.home_scans_left = 0
+
+    PLANNER = ("position", "_velocity", "unwind", "control_mode", "home_config_ok", "home_position", "geared",
+               "master", "move_remaining", "move_speed", "home_scans_left")
+
+    # -- facts as attributes (what the checks, the calls and World.set use) ------------
+    faulted = property(lambda self: self.fact("faulted"), lambda self, v: self.set_fact("faulted", v))
+    shutdown = property(lambda self: self.fact("shutdown"), lambda self, v: self.set_fact("shutdown", v))
+    energized = property(lambda self: self.fact("energized"), lambda self, v: self.set_fact("energized", v))
+    homed = property(lambda self: self.fact("homed"), lambda self, v: self.set_fact("homed", v))
+    homing = property(lambda self: self.fact("homing"), lambda self, v: self.set_fact("homing", v))
+    direct_control = property(lambda self: self.fact("direct_control"),
+                              lambda self, v: self.set_fact("direct_control", v))
+
+    @property
+    def tracking(self) -> bool:
+        """The axis follows the planner (the motion in process advances)."""
+        return bool(self.fact("tracking"))
+
+    @property
+    def can_move(self) -> bool:
+        """A motion in process may go on: not faulted, not shut down, tracking or about to (INT-068)."""
+        return not self.faulted and not self.shutdown and bool(self.tracking or self.fact("starting"))
+
+    @property
+    def velocity(self) -> float:
+        return self._velocity
+
+    @velocity.setter
+    def velocity(self, value: float) -> None:
+        self._velocity = value
+        if self.binding.fact("moving") is not None:
+            self.set_fact("moving", value != 0)
+            if not self.fact("moving"):
+                self._velocity = 0.0  # the chart refused the motion (faulted, shut down)
+
+    def _after_chart(self) -> None:
+        if self.binding.fact("moving") is not None and not self.fact("moving"):
+            self._velocity = 0.0  # a fault, shutdown or stop of the chart ended the motion
 
     @property
     def rotary(self) -> bool:
         return self.unwind > 0
 
-    @property
-    def cip_axis_state(self) -> int:
-        """A stand-in for the AxisCIP chart's CIPAxisState (Stopped 2, Running 4, Faulted 8, Shutdown 10)."""
-        if self.shutdown:
-            return 10
-        if self.faulted:
-            return 8
-        return 4 if self.energized else 2
+    def clock(self) -> None:
+        """The motion update (coarse update) reaches the chart: its clock events."""
+        for e in self.binding.on_scan:
+            self.fire(e)
+
+    def stop_motion(self) -> None:
+        """Motion, homing and gearing in process end (MAS Stop All, or a fault / shutdown)."""
+        self.move_remaining = 0.0
+        self.home_scans_left = 0
+        self.geared = False
+        for e in self.binding.stop:
+            self.fire(e)
+        if "homing" in self.plain:
+            self.plain["homing"] = False
+        self.velocity = 0.0
 
     def env(self, prefix: str) -> dict[str, object]:
         out: dict[str, object] = {f"{prefix}.{k}": getattr(self, k) for k in _AXIS_PROPS}
@@ -433,25 +840,57 @@ class Axis:
         out = {k: getattr(self, k) for k in ("position", "velocity", "homed", "energized", "faulted", "shutdown",
                                              "geared", "homing", "direct_control")}
         out["moving"] = self.velocity != 0
-        if self.type == "AXIS_CIP_DRIVE":
-            out["CIPAxisState"] = self.cip_axis_state
+        out["state"] = self.chart_state
+        out[self.runner.chart.state_attribute] = self.chart_value
         return out
 
+    def snapshot(self) -> tuple[object, ...]:
+        return (self.snap, tuple(getattr(self, k) for k in self.PLANNER), tuple(sorted(self.plain.items())))
 
-@dataclass
-class Handler:
-    name: str
-    id: int = 1
-    registered: int = 0
-    capacity: int = 10
-    eState: int = 7
-    mode: str = "physical"
-    phy_axis: str = ""
-    pth_axis: str = ""
-    OnPath: bool = False
+    def restore(self, snap: tuple[object, ...]) -> None:
+        chart, planner, plain = snap  # type: ignore[misc]
+        self.snap = chart
+        for k, v in zip(self.PLANNER, planner):
+            setattr(self, k, v)
+        self.plain = dict(plain)
+
+
+class Handler(ChartObject):
+    """A device handler: its DeviceHandler chart plus its id and associated axes (configuration)."""
+
+    def __init__(self, name: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap, *, id: int = 1,
+                 phy_axis: str = "", pth_axis: str = "") -> None:
+        super().__init__(name, binding, runner, snap)
+        self.id = id
+        self.phy_axis = phy_axis
+        self.pth_axis = pth_axis
+
+    eState = property(lambda self: self.fact("eState"), lambda self, v: self.set_fact("eState", v))
+    mode = property(lambda self: self.fact("mode"), lambda self, v: self.set_fact("mode", v))
+    OnPath = property(lambda self: self.fact("OnPath"), lambda self, v: self.set_fact("OnPath", v))
+    registered = property(lambda self: self.fact("registered"), lambda self, v: self.set_fact("registered", v))
+    capacity = property(lambda self: self.fact("capacity"), lambda self, v: self.set_fact("capacity", v))
+
+    def register(self) -> int:
+        """A method registers (the binding's `register` events); its order, or 0 when the registry is full."""
+        before = self.registered
+        for e in self.binding.register:
+            self.fire(e)
+        after = self.registered
+        return int(after) if after != before else 0  # type: ignore[call-overload]
 
     def observe(self) -> dict[str, object]:
-        return {"eState": self.eState, "mode": self.mode, "OnPath": self.OnPath, "registered": self.registered}
+        out = {"eState": self.eState, "mode": self.mode, "OnPath": self.OnPath, "registered": self.registered,
+               "capacity": self.capacity}
+        if self.binding.fact("running") is not None:
+            out["running"] = self.fact("running")
+        return out
+
+    def snapshot(self) -> tuple[object, ...]:
+        return (self.snap, self.id, self.phy_axis, self.pth_axis)
+
+    def restore(self, snap: tuple[object, ...]) -> None:
+        self.snap, self.id, self.phy_axis, self.pth_axis = snap  # type: ignore[assignment]
 
 
 @dataclass
@@ -460,7 +899,7 @@ class PendingCall:
     axis: str
     done: bool = False
     err: int = 0
-    aborted: bool = False  # the axis faulted or shut down under it (INT-046)
+    aborted: bool = False  # the axis faulted, shut down or lost its power under it (INT-046, INT-068)
 
 
 @dataclass
@@ -486,6 +925,14 @@ def _finite(value: object) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
 
 
+#: The order in which one `set:` applies its fields: resets before enables (MASR, MAFR, then MSO).
+SET_ORDER = ("shutdown", "faulted", "energized")
+#: Fields of a handler that are configuration of the instance, not chart facts.
+HANDLER_CONFIG = ("id", "phy_axis", "pth_axis")
+#: Axis fields that are the planner's numbers and configuration.
+AXIS_PLANNER_FIELDS = ("position", "velocity", "unwind", "control_mode", "home_config_ok", "home_position")
+
+
 class World:
     """Device handlers, axes and AOI instances advanced one PLC scan at a time."""
 
@@ -502,6 +949,64 @@ class World:
                 inst.inputs.setdefault(n, default)
             for n, t in spec.outputs:
                 inst.outputs.setdefault(n, False if t == "BOOL" else 0)
+
+    # -- state access (scenarios, the model checker) -----------------------------
+    def _object(self, obj: str) -> Handler | Axis:
+        target = self.handlers.get(obj) or self.axes.get(obj)
+        if target is None:
+            raise KeyError(f"unknown handler or axis {obj!r}")
+        return target
+
+    def set(self, obj: str, field: str, value: object) -> None:
+        """What a scenario step's ``set:`` does to one handler or axis field (INT-069).
+
+        A chart fact fires the chart events its binding names (``faulted: true`` on an
+        AXIS_CIP_DRIVE is an axis fault, ``energized: true`` an Enable, ...) or assigns
+        its variable; planner fields and handler configuration are assigned.  Nothing
+        happens when the fact already has the value.
+        """
+        target = self._object(obj)
+        if isinstance(target, Handler):
+            if field not in _HANDLER_PROPS:
+                raise KeyError(f"handler {obj} has no field {field!r}; fields: {', '.join(sorted(_HANDLER_PROPS))}")
+        elif field not in _AXIS_PROPS or field == "type":
+            raise KeyError(f"axis {obj} has no settable field {field!r}")
+        setattr(target, field, value)
+
+    def fire(self, obj: str, event: str) -> None:
+        """Send one event to the chart of a handler or an axis (a step's ``events:``)."""
+        self._object(obj).fire(event)
+
+    def snapshot(self) -> tuple[object, ...]:
+        """The whole mutable world state as a hashable, deterministic value (scan index excluded)."""
+        def call(c: PendingCall | None) -> object:
+            return None if c is None else (c.instruction.mnemonic, c.axis, c.done, c.err, c.aborted)
+
+        return (
+            tuple((n, h.snapshot()) for n, h in self.handlers.items()),
+            tuple((n, a.snapshot()) for n, a in self.axes.items()),
+            tuple((n, tuple(sorted(i.inputs.items())), tuple(sorted(i.outputs.items())), i.state,
+                   i.path_verified, tuple(sorted(i.registrations.items())), call(i.call), i.move_type, i.move_target)
+                  for n, i in self.instances.items()),
+        )
+
+    def restore(self, snap: tuple[object, ...]) -> None:
+        """Put the world back into the state :meth:`snapshot` returned (the scan index is kept)."""
+        hs, axs, insts = snap  # type: ignore[misc]
+        for n, s in hs:
+            self.handlers[n].restore(s)
+        for n, s in axs:
+            self.axes[n].restore(s)
+        for n, inputs, outputs, state, verified, regs, call, mt, target in insts:
+            i = self.instances[n]
+            i.inputs = dict(inputs)
+            i.outputs = dict(outputs)
+            i.state = state
+            i.path_verified = verified
+            i.registrations = dict(regs)
+            i.call = None if call is None else PendingCall(self.spec.instruction(call[0]), call[1], call[2], call[3], call[4])
+            i.move_type = mt
+            i.move_target = target
 
     # -- environment -----------------------------------------------------------
     def env(self, inst: Instance) -> dict[str, object]:
@@ -553,9 +1058,10 @@ class World:
 
     def _register(self, inst: Instance) -> None:
         h = self.handlers.get(str(inst.inputs.get("Ref_Handle")))
-        if h is not None and h.name not in inst.registrations and h.registered < h.capacity:
-            h.registered += 1
-            inst.registrations[h.name] = h.id * 1000 + h.registered
+        if h is not None and h.name not in inst.registrations:
+            order = h.register()
+            if order:
+                inst.registrations[h.name] = h.id * 1000 + order
         inst.outputs["Sts_MtdID"] = inst.registrations.get(h.name, 0) if h else 0
 
     def _rung_false(self, inst: Instance) -> None:
@@ -568,12 +1074,7 @@ class World:
 
     def _issue_stop(self, inst: Instance) -> None:
         """MAS (Stop Type All) on the physical axis: motion, homing and gearing stop."""
-        a = self.axes[str(inst.inputs["Ref_AxisPhy"])]
-        a.move_remaining = 0.0
-        a.velocity = 0.0
-        a.homing = False
-        a.home_scans_left = 0
-        a.geared = False
+        self.axes[str(inst.inputs["Ref_AxisPhy"])].stop_motion()
 
     def _error(self, inst: Instance, code: int, exerr: int = 0) -> None:
         inst.outputs.update(Sts_ER=True, Sts_ERR=code, Sts_EXERR=exerr, Sts_IP=False, Sts_PC=False)
@@ -669,22 +1170,24 @@ class World:
             inst.call.done = True
 
     def _motion_update(self) -> None:
+        """The motion task's update at the end of the scan (the coarse update, INT-068):
+        the charts' clocks first, then the planner advances what the charts allow."""
         dt = self.scan_ms / 1000.0
+        for a in self.axes.values():
+            a.clock()
         for a in self.axes.values():
             if not a.geared and a.move_remaining == 0 and not a.homing and a.type == "AXIS_VIRTUAL":
                 a.position = unwind(a.position + a.velocity * dt, a.unwind)
         stopped: set[str] = set()
         for a in self.axes.values():
-            if (a.faulted or a.shutdown) and (a.home_scans_left > 0 or a.move_remaining != 0 or a.geared):
-                # the fault or shutdown stops the axis and ends its motion (INT-046)
-                if a.home_scans_left > 0:
-                    a.homing = False
-                    a.home_scans_left = 0
-                a.move_remaining = 0.0
-                a.velocity = 0.0
-                a.geared = False
+            if (a.home_scans_left > 0 or a.move_remaining != 0 or a.geared) and not a.can_move:
+                # a fault, a shutdown or the loss of power stops the axis and ends its
+                # motion (INT-046, INT-068)
+                a.stop_motion()
                 stopped.add(a.name)
         for a in self.axes.values():
+            if not a.tracking:
+                continue  # Starting: the motion in process waits for Running
             if a.homing and a.home_scans_left > 0:  # homing by our MAH; other homing is the scenario's
                 a.home_scans_left -= 1
                 if a.home_scans_left <= 0:
@@ -744,6 +1247,7 @@ class AoiStep:
     sets: tuple[tuple[str, tuple[tuple[str, object], ...]], ...]
     expect: tuple[tuple[str, str, object], ...]
     line: int
+    events: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -784,6 +1288,48 @@ def _input_problem(spec: AoiSpec, name: str, value: object, refs: Mapping[str, s
     return None if value in known else f"expected the name of a {t} in the setup ({', '.join(sorted(known))}), got {value!r}"
 
 
+def _set_rank(item: tuple[str, object]) -> tuple[int, str]:
+    """Fields of one `set:` apply resets first, then enables (SET_ORDER), then the rest by name."""
+    return (SET_ORDER.index(item[0]) if item[0] in SET_ORDER else len(SET_ORDER), item[0])
+
+
+def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding: ObjectBinding, chart: Any,
+                       err: Any) -> None:
+    """`state:`, `variables:` and `events:` of a set-up entry name things of its chart; fields the
+    chart decides alone keep their defaults."""
+    states = {st.id: st for st in chart.states}
+    if "state" in entry:
+        sid = entry["state"]
+        if sid not in states:
+            err((*parts, "state"), f"chart {chart.id} has no state {sid!r}; states: {', '.join(sorted(states))}")
+        elif any(states[a].kind.value == "parallel" for a in chart.ancestors(sid)) or states[sid].kind.value == "parallel":
+            err((*parts, "state"), f"chart {chart.id} has parallel regions: it cannot be started in {sid!r}; "
+                                   "use `events:` (or the fields) instead")
+        chosen = {n for when, _st, assigns in binding.setup_rules
+                  for n in (*when.names, *(m for _name, e in assigns for m in e.names))}
+        flags = sorted(chosen & set(entry))
+        if flags:
+            err((*parts, "state"), f"give either `state:` or the field(s) {', '.join(flags)}, which choose the state")
+    variables = {v.name: v for v in chart.variables}
+    for k, v in entry.get("variables", {}).items():
+        if k not in variables:
+            err((*parts, "variables", k), f"chart {chart.id} has no variable {k!r}")
+        elif variables[k].domain is not None and v not in variables[k].domain:
+            err((*parts, "variables", k), f"{v!r} is not in the domain of {k}: {list(variables[k].domain)!r}")
+    events = {e.name for e in chart.events}
+    for j, ev in enumerate(entry.get("events", [])):
+        if ev not in events:
+            err((*parts, "events", j), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
+    used = {n for _name, e in binding.setup_variables for n in e.names} | set(binding.then_set)
+    for when, _st, assigns in binding.setup_rules:
+        used |= set(when.names) | {n for _name, e in assigns for n in e.names}
+    defaults = HANDLER_DEFAULTS if binding.kind == "handler" else AXIS_DEFAULTS
+    for fb in binding.facts:
+        if fb.name in entry and fb.name not in used and fb.variable is None and entry[fb.name] != defaults.get(fb.name):
+            err((*parts, fb.name), f"{fb.name} of a {binding.kind} is read from chart {chart.id} and cannot be "
+                                   f"{entry[fb.name]!r} at set-up")
+
+
 def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario:
     """Check an AOI scenario (already parsed) against its schema and the AOI spec."""
     name = str(path)
@@ -818,11 +1364,19 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
             problem = _input_problem(spec, k, v, refs)
             if problem:
                 err(("setup", "aoi", iname, k), f"{k}: {problem}")
+    charts = {c.id: c for c in main_spec(spec.spec_dir).charts}
     objects: dict[str, set[str]] = {}
-    for hname in setup["handlers"]:
-        objects[hname] = set(Handler(hname).observe())
+    bindings: dict[str, ObjectBinding] = {}
+    for hname, h in setup["handlers"].items():
+        bindings[hname] = b = spec.binding("handler")
+        objects[hname] = {"eState", "mode", "OnPath", "registered", "capacity"} | (
+            {"running"} if b.fact("running") else set())
+        _check_chart_setup(("setup", "handlers", hname), h, b, charts[b.chart], err)
     for aname, a in setup["axes"].items():
-        objects[aname] = set(Axis(aname, type=a["type"]).observe())
+        bindings[aname] = b = spec.binding(a["type"])
+        objects[aname] = {"position", "velocity", "homed", "energized", "faulted", "shutdown", "geared", "homing",
+                          "direct_control", "moving", "state", charts[b.chart].state_attribute}
+        _check_chart_setup(("setup", "axes", aname), a, b, charts[b.chart], err)
     outs = {n for n, _ in spec.outputs} | {"state", "path_verified"}
     for iname in setup["aoi"]:
         objects[iname] = outs
@@ -853,6 +1407,20 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
                     err((*p, "set", obj, k), f"{obj} has no settable field {k!r}; fields: {', '.join(sorted(set(props) - {'type'}))}")
                 elif not jsonschema.Draft202012Validator(props[k]).is_valid(v):
                     err((*p, "set", obj, k), f"{obj}.{k}: {v!r} does not match {json.dumps(props[k], sort_keys=True)}")
+                else:
+                    fb = bindings[obj].fact(k)
+                    if fb is not None and fb.variable is None and not fb.sets:
+                        err((*p, "set", obj, k), f"{obj}.{k} is read from chart {bindings[obj].chart} and cannot be set "
+                                                 f"(a {bindings[obj].kind} has no event for it)")
+        for obj, names in s.get("events", {}).items():
+            if obj not in bindings:
+                err((*p, "events", obj), f"unknown handler or axis {obj!r}")
+                continue
+            chart = charts[bindings[obj].chart]
+            known_events = {e.name for e in chart.events}
+            for j, ev in enumerate(names):
+                if ev not in known_events:
+                    err((*p, "events", obj, j), f"chart {chart.id} of {obj} has no event {ev!r}; events: {', '.join(sorted(known_events))}")
         expect = []
         for obj, fields in s.get("expect", {}).items():
             if obj not in objects:
@@ -867,30 +1435,88 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
             i, str(s.get("name", "")), int(s.get("scans", 1)), bool(s.get("prescan", False)),
             tuple(sorted(s.get("rungs", {}).items())),
             tuple((k, tuple(sorted(v.items()))) for k, v in sorted(s.get("operands", {}).items())),
-            tuple((k, tuple(sorted(v.items()))) for k, v in sorted(s.get("set", {}).items())),
-            tuple(expect), line))
+            tuple((k, tuple(sorted(v.items(), key=_set_rank))) for k, v in sorted(s.get("set", {}).items())),
+            tuple(expect), line,
+            tuple((k, tuple(v)) for k, v in sorted(s.get("events", {}).items()))))
     if errors:
         raise ScenarioError(errors)
     return AoiScenario(name, doc["name"], str(doc.get("description", "")), tuple(doc.get("sources", [])),
                        tuple(doc.get("covers", [])), int(setup.get("scan_ms", 10)), setup, tuple(steps))
 
 
+#: The values of a scenario's axis and handler fields when the set-up does not give them.
+AXIS_DEFAULTS: dict[str, object] = {
+    "position": 0.0, "velocity": 0.0, "unwind": 0.0, "homed": True, "energized": True, "faulted": False,
+    "shutdown": False, "control_mode": "position", "direct_control": False, "home_config_ok": True,
+    "home_position": 0.0, "homing": False,
+}
+HANDLER_DEFAULTS: dict[str, object] = {
+    "id": 1, "registered": 0, "capacity": 10, "eState": 7, "mode": "physical", "phy_axis": "", "pth_axis": "",
+    "OnPath": False,
+}
+#: Set-up keys that are not fields: the chart's state, variables and events (docs/aoi.md).
+CHART_SETUP_KEYS = ("state", "variables", "events")
+
+
+def _initial_snap(binding: ObjectBinding, runner: ChartRunner, fields: Mapping[str, object],
+                  entry: Mapping[str, Any]) -> Snap:
+    """The chart's first configuration: the binding's set-up rules, or an explicit `state:`."""
+    variables = {name: e(fields) for name, e in binding.setup_variables}
+    state = None
+    if "state" in entry:
+        state = str(entry["state"])
+    else:
+        for when, st, assigns in binding.setup_rules:
+            if when(fields):
+                state = st
+                variables.update({name: e(fields) for name, e in assigns})
+                break
+    variables.update(entry.get("variables", {}))
+    return runner.initial(state, variables)
+
+
 def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
-    handlers = [Handler(n, **{k: v for k, v in h.items()}) for n, h in setup["handlers"].items()]
+    """The world of a set-up (the `setup:` of a scenario): every object on its chart (INT-069)."""
+    charts = {c.id: c for c in main_spec(spec.spec_dir).charts}
+    scan_ms = int(setup.get("scan_ms", 10))
+    handlers = []
+    hb = spec.binding("handler")
+    hrun = chart_runner(charts[hb.chart], scan_ms)
+    for n, h in setup["handlers"].items():
+        fields = {**HANDLER_DEFAULTS, **{k: v for k, v in h.items() if k not in CHART_SETUP_KEYS}}
+        obj = Handler(n, hb, hrun, _initial_snap(hb, hrun, fields, h), id=int(fields["id"]),  # type: ignore[call-overload]
+                      phy_axis=str(fields["phy_axis"]), pth_axis=str(fields["pth_axis"]))
+        for name in hb.then_set:
+            obj.set_fact(name, fields[name])
+        for e in h.get("events", []):
+            obj.fire(e)
+        handlers.append(obj)
     axes = []
     for n, a in setup["axes"].items():
-        kw = dict(a)
-        if a["type"] == "AXIS_VIRTUAL":
-            kw.setdefault("control_mode", "position")
-        ax = Axis(n, **kw)
-        ax.position = unwind(float(ax.position), ax.unwind)
+        b = spec.binding(a["type"])
+        run = chart_runner(charts[b.chart], scan_ms)
+        fields = {**AXIS_DEFAULTS, **{k: v for k, v in a.items() if k not in CHART_SETUP_KEYS}}
+        ax = Axis(n, a["type"], b, run, _initial_snap(b, run, fields, a))
+        for name in b.then_set:
+            ax.set_fact(name, fields[name])
+        for k in ("homed", "homing", "direct_control"):
+            if k in ax.plain:
+                ax.plain[k] = fields[k]
+        ax.unwind = float(fields["unwind"])  # type: ignore[arg-type]
+        ax.position = unwind(float(fields["position"]), ax.unwind)  # type: ignore[arg-type]
+        ax.control_mode = str(fields["control_mode"])
+        ax.home_config_ok = bool(fields["home_config_ok"])
+        ax.home_position = float(fields["home_position"])  # type: ignore[arg-type]
+        for e in a.get("events", []):
+            ax.fire(e)
+        ax.velocity = float(fields["velocity"])  # type: ignore[arg-type]
         axes.append(ax)
     instances = []
     for n, ops in setup["aoi"].items():
         ops = dict(ops)
         verified = bool(ops.pop("path_verified", False))
         instances.append(Instance(n, ops, path_verified=verified))
-    return World(spec, handlers, axes, instances, scan_ms=int(setup.get("scan_ms", 10)))
+    return World(spec, handlers, axes, instances, scan_ms=scan_ms)
 
 
 def run_aoi_scenario(scenario: AoiScenario, spec: AoiSpec) -> Any:
@@ -906,9 +1532,11 @@ def run_aoi_scenario(scenario: AoiScenario, spec: AoiSpec) -> Any:
         for inst_name, ops in step.operands:
             world.instances[inst_name].inputs.update(dict(ops))
         for obj, fields in step.sets:
-            target: Any = world.handlers.get(obj) or world.axes[obj]
             for k, v in fields:
-                setattr(target, k, v)
+                world.set(obj, k, v)
+        for obj, events in step.events:
+            for e in events:
+                world.fire(obj, e)
         rungs = dict(step.rungs)
         for _ in range(step.scans):
             try:

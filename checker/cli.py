@@ -18,10 +18,10 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from checker import check_cli, render_cli
-from statecharts.diagnostics import InputError
+from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.loader import load_spec
 from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scenario_files
 
@@ -115,22 +115,44 @@ def _missing(paths: Sequence[str]) -> list[str]:
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
+    """Load the spec and the add-on instructions that go with it; every problem of both is reported.
+
+    The add-on instructions (``spec/aoi/`` with the motion instructions they call,
+    ``spec/instructions/motion/``) are those of the bundled spec when no path is given,
+    else those of every given directory that has ``aoi/`` or ``instructions/motion/``.
+    """
+    from statecharts.render.aoi import load_aoi_documents
+
     missing = _missing(args.paths)
     if missing:
         print(f"motionchart validate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
         return EXIT_USAGE
+    problems: list[Diagnostic] = []
+    spec = None
     try:
         spec = load_spec(args.paths or None)
     except InputError as exc:
+        problems.extend(exc.diagnostics)
+    aoi_docs = []
+    try:
+        aoi_docs = load_aoi_documents(args.paths or None)
+    except InputError as exc:
+        # The add-on instruction loader reads the main spec's charts for its world and
+        # quotes the main spec's first error when they do not load: that is no new problem.
+        seen = [str(d) for d in problems]
+        problems.extend(d for d in exc.diagnostics if not any(text in d.message for text in seen))
+    # a YAML error in spec/aoi/ or spec/instructions/motion/ is found by both loaders: report it once
+    problems = list(dict.fromkeys(problems))
+    if problems or spec is None:
         if args.json:
-            json.dump({"valid": False, "errors": [str(d) for d in exc.diagnostics],
-                       "diagnostics": [d.as_dict() for d in exc.diagnostics]}, out, indent=2, sort_keys=True)
+            json.dump({"valid": False, "errors": [str(d) for d in problems],
+                       "diagnostics": [d.as_dict() for d in problems]}, out, indent=2, sort_keys=True)
             out.write("\n")
-        for d in exc.diagnostics:
+        for d in problems:
             print(d, file=sys.stderr)
-        print(f"{len(exc.diagnostics)} error(s)", file=sys.stderr)
+        print(f"{len(problems)} error(s)", file=sys.stderr)
         return EXIT_FAIL
-    summary = {
+    summary: dict[str, object] = {
         "valid": True,
         "files": len(spec.files),
         "charts": [c.id for c in spec.charts],
@@ -140,6 +162,7 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         "checks": sum(len(i.checks) for i in spec.instructions),
         "error_codes": len(spec.errors),
         "interpretations": len(spec.interpretations),
+        "add_on_instructions": [d.summary() for d in aoi_docs],
     }
     if args.json:
         json.dump(summary, out, indent=2, sort_keys=True)
@@ -151,7 +174,20 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
             f"{len(spec.instructions)} instructions ({summary['checks']} checks), "
             f"{summary['error_codes']} error codes, {summary['interpretations']} interpretations\n"
         )
+        if aoi_docs:
+            out.write(_aoi_line(aoi_docs) + "\n")
     return EXIT_OK
+
+
+def _aoi_line(docs: Sequence[Any]) -> str:
+    """``add-on instructions: 1 (17 checks, 21 codes, 8 recovery states, 9 transitions), 5 sub-instructions``."""
+    checks = sum(len(d.checks) for d in docs)
+    codes = sum(len(d.errors) for d in docs)
+    states = sum(len(d.states) for d in docs)
+    transitions = sum(len(d.transitions) for d in docs)
+    subs = sum(len(d.subs) for d in docs)
+    return (f"add-on instructions: {len(docs)} ({checks} checks, {codes} codes, {states} recovery states, "
+            f"{transitions} transitions), {subs} sub-instructions")
 
 
 def _print_table(result: ScenarioResult, out: TextIO) -> None:

@@ -5,12 +5,18 @@ three sub-commands to the main parser's sub-parsers; :func:`dispatch` runs one a
 returns its exit code (``None`` for a command that is not one of these).
 
 * ``motionchart diagram CHART [--format dot|svg|png|mermaid] [-o FILE] [--spec PATH]``:
-  a chart's state diagram, or, for an instruction mnemonic (``MSO``), its flowchart.
+  a chart's state diagram, or, for an instruction mnemonic (``MSO``), its flowchart;
+  for an add-on instruction (``spec/aoi/``), ``<ID>`` draws its flowchart and
+  ``<ID>_recovery`` its recovery chart.
   The format defaults to the output file's suffix (``.dot``/``.gv``, ``.svg``, ``.png``,
   ``.mmd``), else ``dot``.  Without ``-o`` the text goes to standard output; PNG needs
   ``-o``.
 * ``motionchart docs -o DIR [--scenarios DIR] [--spec PATH]``: the Markdown reference
   with its diagrams.
+
+The add-on instructions documented with a spec are those of the bundled spec (no
+``--spec``) or of each ``--spec`` directory that has ``aoi/`` or
+``instructions/motion/`` (:func:`statecharts.render.aoi.aoi_spec_dirs`).
 * ``motionchart generate [-o DIR] [--check] [--scenarios DIR] [--spec PATH]``: every
   artefact into ``generated/``; ``--check`` regenerates into a temporary directory,
   lists what differs and exits 1 (fix: ``make generate``).
@@ -43,7 +49,9 @@ def register(subparsers: Any) -> None:
     d = subparsers.add_parser(
         "diagram", help="draw a chart's state diagram or an instruction's flowchart",
         description="Draw a chart's state diagram, or the flowchart of an instruction (CHART = mnemonic, e.g. MSO).")
-    d.add_argument("chart", metavar="CHART", help="chart id (e.g. AxisNonCIP) or instruction mnemonic (e.g. MSO)")
+    d.add_argument("chart", metavar="CHART",
+                   help="chart id (e.g. AxisNonCIP), instruction mnemonic (e.g. MSO), add-on instruction id "
+                        "(its flowchart) or <id>_recovery (its recovery chart)")
     d.add_argument("--format", "-f", choices=FORMATS, help="output format (default: from -o's suffix, else dot)")
     d.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of standard output")
     d.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
@@ -112,7 +120,6 @@ def _diagram(args: argparse.Namespace, prog: str) -> int:
     from statecharts import ir
     from statecharts.loader import load_spec
     from statecharts.render import UnknownTarget, chart_dot, chart_mermaid, instruction_dot, instruction_mermaid, resolve
-    from statecharts.render.graphviz_bin import render
 
     fmt = args.format
     if fmt is None:
@@ -123,11 +130,37 @@ def _diagram(args: argparse.Namespace, prog: str) -> int:
     try:
         target = resolve(spec, args.chart)
     except UnknownTarget as exc:
-        return _fail(prog, str(exc))
+        return _aoi_diagram(args, prog, fmt, str(exc))
     if isinstance(target, ir.Chart):
         text = chart_mermaid(target) if fmt == "mermaid" else chart_dot(target)
     else:
         text = instruction_mermaid(spec, target) if fmt == "mermaid" else instruction_dot(spec, target)
+    return _emit(args, prog, fmt, text)
+
+
+def _aoi_diagram(args: argparse.Namespace, prog: str, fmt: str, unknown: str) -> int:
+    """``diagram`` for a name that is no chart or instruction: an add-on instruction's diagram."""
+    from statecharts.render import aoi
+
+    names = aoi.diagram_names(aoi.load_aoi_documents(args.spec))
+    found = names.get(args.chart)
+    if found is None:
+        folded = [n for n in names if n.casefold() == args.chart.casefold()]
+        found = names[folded[0]] if len(folded) == 1 else None
+    if found is None:
+        listed = ", ".join(names) or "(none)"
+        return _fail(prog, f"{unknown}; add-on instructions: {listed}")
+    doc, kind = found
+    if kind == "flowchart":
+        text = aoi.aoi_flowchart_mermaid(doc) if fmt == "mermaid" else aoi.aoi_flowchart_dot(doc)
+    else:
+        text = aoi.recovery_mermaid(doc) if fmt == "mermaid" else aoi.recovery_dot(doc)
+    return _emit(args, prog, fmt, text)
+
+
+def _emit(args: argparse.Namespace, prog: str, fmt: str, text: str) -> int:
+    from statecharts.render.graphviz_bin import render
+
     data: bytes = render(text, fmt) if fmt in ("svg", "png") else text.encode("utf-8")
     if not args.output:
         sys.stdout.write(data.decode("utf-8"))  # text formats only: PNG needs -o
@@ -166,6 +199,7 @@ def _check_inputs(args: argparse.Namespace, prog: str) -> int | None:
 
 def _docs(args: argparse.Namespace, prog: str) -> int:
     from statecharts.loader import load_spec
+    from statecharts.render.aoi import load_aoi_documents
     from statecharts.render.generate import build, write
 
     out = Path(args.output)
@@ -173,7 +207,8 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     if bad is not None:
         return bad
     spec = load_spec(args.spec)
-    artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False)
+    docs = load_aoi_documents(args.spec)
+    artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs)
     try:
         report = write(out, artefacts.files, prune=False)
     except OSError as exc:
@@ -185,6 +220,7 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
 
 def _generate(args: argparse.Namespace, prog: str) -> int:
     from statecharts.loader import load_spec
+    from statecharts.render.aoi import load_aoi_documents
     from statecharts.render.generate import FIX_COMMAND, build, stale_files, write
 
     out = Path(args.output)
@@ -192,8 +228,9 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
     if bad is not None:
         return bad
     spec = load_spec(args.spec)
+    docs = load_aoi_documents(args.spec)
     if args.check:
-        artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip")
+        artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip", aoi=docs)
         with tempfile.TemporaryDirectory(prefix="motionchart-generate-") as tmp:
             write(tmp, artefacts.files, prune=False)
             stale = stale_files(out, tmp)
@@ -206,7 +243,7 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
             print(f"  {out.as_posix().rstrip('/')}/{rel}{note}", file=sys.stderr)
         print(f"run `{FIX_COMMAND}` (or `motionchart generate`) to update it", file=sys.stderr)
         return EXIT_FAIL
-    artefacts = build(spec, _scenario_roots(args), out)
+    artefacts = build(spec, _scenario_roots(args), out, aoi=docs)
     try:
         report = write(out, artefacts.files, prune=True)
     except OSError as exc:

@@ -10,6 +10,8 @@ Layout of the output directory::
     diagrams/<chart>.{dot,mmd,svg}
     flowcharts/<MNEMONIC>.{dot,mmd,svg}
     scxml/<chart>.scxml         (``generate`` only)
+    aoi/<AOI>.md                add-on instructions (``spec/aoi/``), with
+    flowcharts/<AOI>.{dot,mmd,svg}, diagrams/<AOI>_recovery.{dot,mmd,svg}
 
 The bytes depend only on the spec and the scenarios: sorted or spec-ordered content,
 relative paths, no dates.  SVG is the one artefact made by an external program; each
@@ -28,17 +30,19 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from statecharts import ir
+from statecharts.diagnostics import Diagnostic, SpecError
+from statecharts.render import aoi as aoi_render
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import instruction_dot
 from statecharts.render.graphviz_bin import GraphvizNotFoundError, render
 from statecharts.render.labels import spec_path
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
-from statecharts.render.reference import GENERATED_NOTE, reference_pages
+from statecharts.render.reference import GENERATED_NOTE, Use, reference_pages
 from statecharts.render.scxml import chart_scxml
 from statecharts.render.traceability import Traceability, trace
 
 #: Sub-directories whose whole content the generator owns (stale files there are removed).
-MANAGED_DIRS = ("charts", "instructions", "diagrams", "flowcharts", "scxml")
+MANAGED_DIRS = ("charts", "instructions", "diagrams", "flowcharts", "scxml", "aoi")
 #: Top-level files the generator owns.
 TOP_FILES = ("README.md", "index.md", "interpretations.md", "error-codes.md", "traceability.md")
 #: The command that brings ``generated/`` up to date.
@@ -73,7 +77,10 @@ def _readme() -> str:
         "is out of date.", "",
         "- [index.md](index.md): the reference (charts, instructions, interpretations, error codes, traceability)",
         "- `diagrams/`: state diagrams as Graphviz DOT, Mermaid and SVG",
-        "- `flowcharts/`: instruction flowcharts as Graphviz DOT, Mermaid and SVG",
+        "- `flowcharts/`: instruction flowcharts as Graphviz DOT, Mermaid and SVG (also those of the "
+        "add-on instructions)",
+        "- `aoi/`: one page per add-on instruction (`spec/aoi/`): inputs, ordered checks, error codes, "
+        "recovery chart (`diagrams/<id>_recovery.*`), the motion instructions it calls",
         "- `scxml/`: each chart as W3C SCXML (loads with `statemachine.io.load(path, format=\"scxml\")`)", "",
     ])
 
@@ -98,8 +105,12 @@ def build(
     readme: bool = True,
     render_svg: Callable[[str], bytes] | None = None,
     missing_renderer: str = "raise",
+    aoi: Sequence[aoi_render.AoiDocument] = (),
 ) -> Artefacts:
     """Everything for ``out_dir`` (used for relative links and as the SVG cache).
+
+    ``aoi``: the add-on instructions to document with the spec
+    (:func:`statecharts.render.aoi.load_aoi_documents`); none by default.
 
     ``missing_renderer`` says what to do when an SVG must be drawn and no Graphviz
     program is installed: ``"raise"`` (GraphvizNotFoundError) or ``"skip"`` (leave it
@@ -118,9 +129,25 @@ def build(
     for i in spec.instructions:
         dots[f"flowcharts/{i.id}"] = instruction_dot(spec, i)
         text[f"flowcharts/{i.id}.mmd"] = instruction_mermaid(spec, i)
+    catalog = {e.code: e.name for e in spec.errors}
+    extra_uses: dict[str, list[Use]] = {}
+    for doc in aoi:
+        fc, rc = aoi_render.flowchart_name(doc), aoi_render.recovery_name(doc)
+        clash = [n for n in (f"flowcharts/{fc}", f"diagrams/{rc}") if n in dots]
+        if clash:
+            raise SpecError([Diagnostic(doc.file, doc.prov.line, 1, "aoi.id",
+                                        f"add-on instruction {doc.id!r} would overwrite {clash[0]}.dot; rename it")])
+        dots[f"flowcharts/{fc}"] = aoi_render.aoi_flowchart_dot(doc)
+        text[f"flowcharts/{fc}.mmd"] = aoi_render.aoi_flowchart_mermaid(doc)
+        dots[f"diagrams/{rc}"] = aoi_render.recovery_dot(doc)
+        text[f"diagrams/{rc}.mmd"] = aoi_render.recovery_mermaid(doc)
+        text[aoi_render.page_path(doc)] = aoi_render.aoi_page(doc, tr, catalog, [c.id for c in spec.charts])
+        for k, uses in aoi_render.aoi_uses(doc).items():
+            extra_uses.setdefault(k, []).extend(uses)
     for stem, dot in dots.items():
         text[f"{stem}.dot"] = dot
-    text.update(reference_pages(spec, tr, scxml=scxml))
+    aoi_table = (aoi_render.INDEX_HEADER, aoi_render.index_rows(aoi)) if aoi else None
+    text.update(reference_pages(spec, tr, scxml=scxml, aoi_table=aoi_table, extra_uses=extra_uses))
     if readme:
         text["README.md"] = _readme()
     files = {k: v.encode("utf-8") for k, v in text.items()}

@@ -141,7 +141,8 @@ def flowchart_mermaid(fc: Flowchart) -> str:
     for e in fc.edges:
         arrow = "-.->" if e.back else "-->"
         if e.label:
-            arrow = f"-. {e.label} .->" if e.back else f"-- {e.label} -->"
+            label = text(e.label)
+            arrow = f"-. {label} .->" if e.back else f"-- {label} -->"
         out.append(f"{INDENT}{e.source} {arrow} {e.target}")
     for kind, style in _FLOW_CLASSES.items():
         ids = [n.id for n in fc.nodes if n.kind == kind]

@@ -370,8 +370,11 @@ def table_blocks_note() -> str:
     return "What every execution of the instruction does, whatever the row:"
 
 
-def interpretations_page(spec: ir.Spec) -> str:
+def interpretations_page(spec: ir.Spec, extra_uses: dict[str, list[Use]] | None = None) -> str:
+    """``extra_uses``: users outside the IR (the add-on instructions of ``spec/aoi/``)."""
     uses = interpretation_uses(spec)
+    for k, more in sorted((extra_uses or {}).items()):
+        uses[k] = sorted(set(uses.get(k, [])) | set(more), key=lambda u: u.label)
     out = [GENERATED_NOTE, "", "# Interpretations", "",
            "Where the source documents are silent, garbled or contradict each other, the spec records "
            "what it chose and why. Each entry lists the spec elements that rely on it.", ""]
@@ -431,7 +434,9 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
            "exercise it. Scenarios are *run* on the engine to fill this page: a scenario counts for a state "
            "when some scan observes the axis in it (or in a state inside it), and for an error code when "
            "some scan observes the instruction's tag with `ER` set and that `ERR` / `EXERR`. Their "
-           "`covers:` lists are shown at the end, beside what the runs observed.", ""]
+           "`covers:` lists are shown at the end, beside what the runs observed. For an add-on instruction "
+           "scenario they are read from its instances (`AOI.<state>` of the recovery chart, `AOI <Sts_ERR>` "
+           "with `Sts_ER` set); the add-on instruction's own page lists them by code and state.", ""]
     if tr.root is None:
         out += ["_No scenario directory was found, so no scenario is listed._", ""]
     else:
@@ -483,8 +488,9 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
                       "Codes observed"], [
             [f"[{cell(r.name)}]({tr.link_base}{r.path})", "pass" if r.passed else "**fail**", str(r.scans),
              cell(", ".join(r.covers)), cell("; ".join(r.sources)),
-             cell(", ".join(f"{c}.{s}" for c, s in sorted(r.states))),
-             cell(", ".join(f"{i} {e}" + (f"/{x}" if x else "") for i, e, x in sorted(r.errors)))]
+             cell(", ".join([f"{c}.{s}" for c, s in sorted(r.states)] + [f"AOI.{s}" for s in sorted(r.aoi_states)])),
+             cell(", ".join([f"{i} {e}" + (f"/{x}" if x else "") for i, e, x in sorted(r.errors)]
+                            + [f"AOI {e}" + (f"/{x}" if x else "") for e, x in sorted(r.aoi_errors)]))]
             for r in tr.runs
         ])
     if tr.problems:
@@ -493,7 +499,8 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
     return "\n".join(out) + "\n"
 
 
-def index_page(spec: ir.Spec, *, scxml: bool) -> str:
+def index_page(spec: ir.Spec, *, scxml: bool, aoi_table: tuple[Sequence[str], Sequence[Sequence[str]]] | None = None) -> str:
+    """``aoi_table``: header and rows of the add-on instruction section (none: no section)."""
     out = [GENERATED_NOTE, "", "# motionchart reference", "",
            "Generated from the specification in `spec/`: state diagrams, instruction flowcharts, "
            "reference tables, the interpretations the spec relies on, the error-code catalog and a "
@@ -512,6 +519,12 @@ def index_page(spec: ir.Spec, *, scxml: bool) -> str:
          f"`{spec_path(spec, i.location.file)}`"]
         for i in spec.instructions
     ])
+    if aoi_table is not None:
+        header, rows = aoi_table
+        out += ["", "## Add-on instructions", "",
+                "Instructions defined in `spec/aoi/` that call motion instructions (`spec/instructions/motion/`): "
+                "their ordered checks, error codes and recovery chart.", ""]
+        out += table(list(header), rows)
     out += ["", "## Cross-references", "",
             f"- [Interpretations](interpretations.md): {len(spec.interpretations)} documented choices",
             f"- [Error codes](error-codes.md): {len(spec.errors)} generic codes, "
@@ -532,11 +545,18 @@ def index_page(spec: ir.Spec, *, scxml: bool) -> str:
     return "\n".join(out) + "\n"
 
 
-def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool) -> dict[str, str]:
-    """Every Markdown page, keyed by its path relative to the output directory."""
+def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool,
+                    aoi_table: tuple[Sequence[str], Sequence[Sequence[str]]] | None = None,
+                    extra_uses: dict[str, list[Use]] | None = None) -> dict[str, str]:
+    """Every Markdown page, keyed by its path relative to the output directory.
+
+    ``aoi_table`` and ``extra_uses`` come from :mod:`statecharts.render.aoi` (the index
+    section and the interpretation users of the add-on instructions); their own pages are
+    written there.
+    """
     pages = {
-        "index.md": index_page(spec, scxml=scxml),
-        "interpretations.md": interpretations_page(spec),
+        "index.md": index_page(spec, scxml=scxml, aoi_table=aoi_table),
+        "interpretations.md": interpretations_page(spec, extra_uses),
         "error-codes.md": error_codes_page(spec, tr),
         "traceability.md": traceability_page(spec, tr),
     }

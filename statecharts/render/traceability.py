@@ -6,7 +6,10 @@ Pipeline position: IR + scenario files -> :mod:`statecharts.scenario` (load, run
 What a scenario exercises is read from its *run*, not from its ``covers:`` list: every
 scan's observations give each axis's active leaf state (its ancestors are active too)
 and each tag's ``ER`` / ``ERR`` / ``EXERR`` / ``DN``.  ``covers:`` and ``sources:`` are
-kept to be shown beside the observed facts.  A scenario that cannot be loaded or
+kept to be shown beside the observed facts.  Add-on instruction scenarios
+(``format: motionchart-aoi-scenario/1``, :mod:`statecharts.aoi`) are read the same way
+from their instances' ``Sts_`` members: the recovery-chart states observed, the
+``Sts_ERR`` / ``Sts_EXERR`` seen with ``Sts_ER`` set, and ``Sts_PC``.  A scenario that cannot be loaded or
 crashes is reported, never raised: generated docs must not depend on every scenario
 being valid.
 """
@@ -18,6 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from statecharts import ir
+from statecharts.aoi import AoiScenario
 from statecharts.diagnostics import InputError
 from statecharts.scenario import load_scenario, run_scenario, scenario_files
 
@@ -35,6 +39,9 @@ class ScenarioRun:
     states: frozenset[tuple[str, str]]  # (chart id, state id) observed active
     errors: frozenset[tuple[str, int, int]]  # (instruction, ERR, EXERR) observed with ER set
     done: frozenset[str]  # instructions observed with DN set
+    aoi_states: frozenset[str] = frozenset()  # recovery-chart states of an add-on instruction instance
+    aoi_errors: frozenset[tuple[int, int]] = frozenset()  # (Sts_ERR, Sts_EXERR) observed with Sts_ER set
+    aoi_done: bool = False  # some add-on instruction instance observed with Sts_PC set
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -58,6 +65,16 @@ class Traceability:
 
     def completing(self, instruction: str) -> list[ScenarioRun]:
         return [r for r in self.runs if instruction in r.done]
+
+    def aoi_producing(self, code: int, exerr: int | None = None) -> list[ScenarioRun]:
+        """Add-on instruction scenarios that observed ``Sts_ERR = code`` (and ``exerr`` if given)."""
+        return [r for r in self.runs if any(e == code and (exerr is None or x == exerr) for e, x in r.aoi_errors)]
+
+    def aoi_reaching(self, state: str) -> list[ScenarioRun]:
+        return [r for r in self.runs if state in r.aoi_states]
+
+    def aoi_completing(self) -> list[ScenarioRun]:
+        return [r for r in self.runs if r.aoi_done]
 
 
 def display_path(path: Path, root: Path) -> str:
@@ -95,12 +112,22 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
                 continue
             charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
             instr = {p.tag: p.instruction for p in scenario.program}
+            instances = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
             states: set[tuple[str, str]] = set()
             errors: set[tuple[str, int, int]] = set()
             done: set[str] = set()
+            aoi_states: set[str] = set()
+            aoi_errors: set[tuple[int, int]] = set()
+            aoi_done = False
             for row in result.rows:
                 for obj, fields in row.record.observations.items():
-                    if obj in charts:
+                    if obj in instances:
+                        if isinstance(fields.get("state"), str):
+                            aoi_states.add(str(fields["state"]))
+                        if fields.get("Sts_ER"):
+                            aoi_errors.add((int(fields.get("Sts_ERR", 0)), int(fields.get("Sts_EXERR", 0))))
+                        aoi_done = aoi_done or bool(fields.get("Sts_PC"))
+                    elif obj in charts:
                         chart = charts[obj]
                         leaf = fields.get("state")
                         if isinstance(leaf, str):
@@ -113,7 +140,8 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
             runs.append(ScenarioRun(
                 path=shown, name=scenario.name, passed=result.passed, scans=len(result.rows),
                 covers=scenario.covers, sources=scenario.sources, states=frozenset(states),
-                errors=frozenset(errors), done=frozenset(done),
+                errors=frozenset(errors), done=frozenset(done), aoi_states=frozenset(aoi_states),
+                aoi_errors=frozenset(aoi_errors), aoi_done=aoi_done,
             ))
     shown_root = ", ".join(sorted(Path(r).resolve().name for r in existing))
     return Traceability(tuple(sorted(runs)), tuple(sorted(problems)), shown_root)

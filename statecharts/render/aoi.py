@@ -1,0 +1,1024 @@
+"""Add-on instructions (``spec/aoi/``) -> reference page, flowchart and recovery-chart diagram.
+
+Pipeline position: ``spec/aoi/*.yaml`` + ``spec/instructions/motion/*.yaml`` ->
+:func:`statecharts.aoi.load_aoi` (schema, expressions, cross-references) -> **this
+module** -> ``generated/aoi/<ID>.md``, ``generated/flowcharts/<ID>.{dot,mmd,svg}`` and
+``generated/diagrams/<ID>_recovery.{dot,mmd,svg}`` (through ``motionchart generate``,
+``motionchart docs`` and ``motionchart diagram <ID>`` / ``<ID>_recovery``).
+
+:class:`~statecharts.aoi.AoiSpec` keeps what the world model runs (ids, codes, parsed
+expressions, calls); it drops what a reader audits: the ``source`` and
+``interpretation`` of inputs, outputs, codes, transitions and routines, state
+descriptions, data types and line numbers.  :func:`load_aoi_document` therefore loads
+the spec with ``load_aoi`` first (so every problem is reported exactly as the loader
+reports it) and then reads those fields from the same, now known-good, YAML files,
+matching them to the loaded records by position and id.  A few consistency checks the
+renderers rely on (unique check ids, codes, states, inputs and outputs) are added by
+:func:`aoi_problems`, with located diagnostics.
+
+Nothing here names the bundled instruction: every page, node and edge is derived from
+the loaded data, in spec order (checks, transitions, sub-instruction preconditions) or
+sorted order (error codes), so the same spec gives the same bytes.  The one rule taken
+from the world model rather than the data is the meaning of a check's ``applies``: the
+value of :data:`APPLIES_INPUT` for which the check runs (``statecharts.aoi.World``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import graphviz
+
+from statecharts.aoi import AoiSpec, RecoveryState, SubInstruction, aoi_files, load_aoi
+from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
+from statecharts.loader import bundled_spec_dir, read_yaml
+from statecharts.render.dot import FONT, MONO, esc, html_lines, html_table, sorted_attrs
+from statecharts.render.flowchart import FlowEdge, FlowNode, Flowchart, flowchart_dot
+from statecharts.render.labels import paragraph, wrap
+from statecharts.render.mermaid import INDENT, flowchart_mermaid, text
+from statecharts.render.reference import (
+    GENERATED_NOTE,
+    Use,
+    anchor,
+    cell,
+    code,
+    interp_link,
+    scenario_links,
+    table,
+)
+from statecharts.render.traceability import Traceability
+
+#: The input a check's ``applies`` value is compared with (as ``statecharts.aoi.World`` does).
+APPLIES_INPUT = "Cfg_SyncType"
+#: Suffix of the recovery chart's diagram name (``motionchart diagram <ID>_recovery``).
+RECOVERY_SUFFIX = "_recovery"
+#: What the ``axis`` / ``master`` of a call refers to.
+AXIS_ROLES = {"phy": "physical axis (Ref_AxisPhy)", "pth": "path axis (Ref_AxisPth)"}
+_ERROR_NODE = "__error__"
+
+
+# --------------------------------------------------------------------------- the document
+
+
+@dataclass(frozen=True, slots=True)
+class Prov:
+    """Where a record comes from: its documentary source, interpretation and spec line."""
+
+    source: str
+    interpretation: str | None
+    line: int
+
+
+@dataclass(frozen=True, slots=True)
+class Operand:
+    name: str
+    type: str
+    data_type: str | None
+    default: object
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class ErrorCode:
+    code: int
+    name: str
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class CheckRow:
+    number: int  # 1-based, the order of evaluation
+    id: str
+    code: int
+    applies: int | None
+    fails: str
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class StateRow:
+    state: RecoveryState
+    description: str
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class TransitionRow:
+    number: int
+    source: str
+    target: str
+    when: str
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class OnDone:
+    when: str
+    sets: str
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class Routine:
+    """The rung-false or prescan routine: members cleared, a call issued, facts forgotten."""
+
+    clear: tuple[str, ...]
+    abort_call: str | None
+    forget: tuple[str, ...]
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class SubCheckRow:
+    number: int
+    fails: str
+    err: int
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class SubDocument:
+    sub: SubInstruction
+    file: str  # as shown: spec/instructions/motion/MAH.yaml
+    axis_types: tuple[str, ...]
+    checks: tuple[SubCheckRow, ...]
+    completes: Prov
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class WorldFact:
+    name: str
+    read: str  # the expression or variable it is read from, as written
+    sets: tuple[str, ...]  # "value: event, event" for each way a scenario can set it
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class WorldObject:
+    """One kind of object of the world (an axis data type, the handler) and the chart that runs it."""
+
+    kind: str
+    chart: str
+    facts: tuple[WorldFact, ...]
+    prov: Prov
+
+
+@dataclass(frozen=True, slots=True)
+class AoiDocument:
+    """An add-on instruction as the renderers need it: the loaded spec plus provenance."""
+
+    spec: AoiSpec
+    file: str  # as shown: spec/aoi/sync_pth_phy_ax.yaml
+    prov: Prov
+    execution: str
+    execution_source: str
+    inputs: tuple[Operand, ...]
+    outputs: tuple[Operand, ...]
+    errors: tuple[ErrorCode, ...]  # spec order
+    checks: tuple[CheckRow, ...]  # evaluation order
+    recovery: Prov
+    states: tuple[StateRow, ...]
+    transitions: tuple[TransitionRow, ...]
+    on_done: tuple[OnDone, ...]
+    rung_false: Routine
+    prescan: Routine
+    subs: tuple[SubDocument, ...]
+    world: tuple[WorldObject, ...] = ()  # empty when the file has no `world` section
+    world_prov: Prov | None = None
+
+    @property
+    def id(self) -> str:
+        return self.spec.id
+
+    def error(self, code: int) -> ErrorCode | None:
+        return next((e for e in self.errors if e.code == code), None)
+
+    def error_name(self, code: int) -> str:
+        e = self.error(code)
+        return e.name if e else ""
+
+    def sub(self, mnemonic: str) -> SubDocument | None:
+        return next((s for s in self.subs if s.sub.mnemonic == mnemonic), None)
+
+    def summary(self) -> dict[str, object]:
+        """The counts ``motionchart validate`` prints."""
+        return {"id": self.id, "file": self.file, "checks": len(self.checks), "error_codes": len(self.errors),
+                "recovery_states": len(self.states), "recovery_transitions": len(self.transitions),
+                "sub_instructions": [s.sub.mnemonic for s in self.subs]}
+
+
+def shown_path(path: Path, spec_dir: Path) -> str:
+    """``spec/aoi/x.yaml`` for the bundled spec, ``<dir name>/aoi/x.yaml`` otherwise; never absolute."""
+    root = spec_dir.resolve()
+    try:
+        rel = path.resolve().relative_to(root).as_posix()
+    except ValueError:
+        return path.name
+    try:
+        bundled = root == bundled_spec_dir().resolve()
+    except (OSError, ModuleNotFoundError):  # pragma: no cover - package data missing
+        bundled = False
+    return f"{'spec' if bundled else root.name}/{rel}"
+
+
+def aoi_spec_dirs(paths: Sequence[Path | str] | None) -> list[Path]:
+    """The spec directories whose add-on instructions go with a spec given as ``paths``.
+
+    No paths: the bundled spec.  Otherwise every given directory that has an ``aoi/``
+    or an ``instructions/motion/`` sub-directory (a file or a directory without either
+    has no add-on instruction).
+    """
+    if not paths:
+        return [bundled_spec_dir()]
+    dirs: list[Path] = []
+    for p in paths:
+        d = Path(p)
+        if d.is_dir() and ((d / "aoi").is_dir() or (d / "instructions" / "motion").is_dir()):
+            if all(d.resolve() != x.resolve() for x in dirs):
+                dirs.append(d)
+    return dirs
+
+
+def _prov(node: Any, tree: Any, parts: tuple[Any, ...]) -> Prov:
+    interp = node.get("interpretation") if isinstance(node, dict) else None
+    source = node.get("source", "") if isinstance(node, dict) else ""
+    return Prov(str(source), str(interp) if interp else None, locate(tree, parts)[0])
+
+
+def _read(path: Path, errors: list[Diagnostic]) -> Any:
+    tree = read_yaml(path, errors)
+    if tree is None and not errors:
+        errors.append(Diagnostic(str(path), 1, 1, "", "the file is empty; expected a `format:` line and its document"))
+    return tree
+
+
+def _loader_diagnostics(exc: SpecError, spec_dir: Path, files: Sequence[Path]) -> list[Diagnostic]:
+    """The loader's diagnostics, with two gaps filled: a file count reported against the
+    bundled directory whatever directory was read, and an empty file reported by nothing."""
+    out: list[Diagnostic] = []
+    bundled_aoi = str(bundled_spec_dir() / "aoi")
+    for d in exc.diagnostics:
+        if d.file == bundled_aoi and "add-on instruction file" in d.message:
+            d = dataclasses.replace(d, file=str(spec_dir / "aoi"))
+        out.append(d)
+    for f in files:
+        scratch: list[Diagnostic] = []
+        if read_yaml(f, scratch) is None and not scratch:
+            out.append(Diagnostic(str(f), 1, 1, "", "the file is empty; expected a `format:` line and its document"))
+    return out
+
+
+def load_aoi_document(spec_dir: Path | str | None = None) -> AoiDocument:
+    """Load the add-on instruction of ``spec_dir`` (default: bundled) with its provenance.
+
+    Raises :class:`SpecError` with every located problem (the loader's and
+    :func:`aoi_problems`'), never another exception for bad input.
+    """
+    root = Path(spec_dir) if spec_dir is not None else bundled_spec_dir()
+    aoi_paths, sub_paths = aoi_files(root)
+    try:
+        spec = load_aoi(root)
+    except SpecError as exc:
+        raise SpecError(_loader_diagnostics(exc, root, [*sub_paths, *aoi_paths])) from None
+    errors: list[Diagnostic] = []
+    subs: list[SubDocument] = []
+    by_mnemonic = {s.mnemonic: s for s in spec.instructions}
+    seen: dict[str, str] = {}
+    for p in sub_paths:
+        tree = _read(p, errors)
+        if tree is None:
+            continue
+        d = tree["instruction"]
+        mnemonic = str(d["mnemonic"])
+        if mnemonic in seen:
+            line, col = locate(tree, ("instruction", "mnemonic"))
+            errors.append(Diagnostic(str(p), line, col, "instruction.mnemonic",
+                                     f"sub-instruction {mnemonic!r} is also defined in {seen[mnemonic]}"))
+            continue
+        seen[mnemonic] = shown_path(p, root)
+        sub = by_mnemonic[mnemonic]
+        base = ("instruction",)
+        rows = tuple(
+            SubCheckRow(n, str(c["fails"]), int(c["err"]), _prov(c, tree, (*base, "checks", n - 1)))
+            for n, c in enumerate(d["checks"], start=1)
+        )
+        subs.append(SubDocument(sub, shown_path(p, root), tuple(str(t) for t in d["axis_types"]), rows,
+                                _prov(d["completes"], tree, (*base, "completes")), _prov(d, tree, base)))
+    path = aoi_paths[0]
+    tree = _read(path, errors)
+    if tree is None:
+        raise SpecError(errors)
+    d = tree["aoi"]
+    base = ("aoi",)
+    inputs = tuple(
+        Operand(str(i["name"]), str(i["type"]), str(i["data_type"]) if "data_type" in i else None, i.get("default"),
+                _prov(i, tree, (*base, "inputs", n)))
+        for n, i in enumerate(d["inputs"])
+    )
+    outputs = tuple(Operand(str(o["name"]), str(o["type"]), None, None, _prov(o, tree, (*base, "outputs", n)))
+                    for n, o in enumerate(d["outputs"]))
+    codes = tuple(ErrorCode(int(e["code"]), str(e["name"]), _prov(e, tree, (*base, "errors", n)))
+                  for n, e in enumerate(d["errors"]))
+    checks = tuple(
+        CheckRow(n + 1, c.id, c.code, c.applies, c.fails.text, _prov(d["checks"][n], tree, (*base, "checks", n)))
+        for n, c in enumerate(spec.checks)
+    )
+    rec = d["recovery"]
+    states = tuple(
+        StateRow(s, str(rec["states"][n].get("description", "")),
+                 _prov(rec["states"][n], tree, (*base, "recovery", "states", n)))
+        for n, s in enumerate(spec.states)
+    )
+    transitions = tuple(
+        TransitionRow(n + 1, t.source_state, t.target, t.when.text,
+                      _prov(rec["transitions"][n], tree, (*base, "recovery", "transitions", n)))
+        for n, t in enumerate(spec.transitions)
+    )
+    on_done = tuple(OnDone(w.text, target, _prov(d["on_done"][n], tree, (*base, "on_done", n)))
+                    for n, (w, target) in enumerate(spec.on_done))
+    rung_false = Routine(spec.rung_false_clear, spec.abort_call, (),
+                         _prov(d["rung_false"], tree, (*base, "rung_false")))
+    prescan = Routine(spec.prescan_clear, None, spec.prescan_forget, _prov(d["prescan"], tree, (*base, "prescan")))
+    world, world_prov = _world(d, tree)
+    doc = AoiDocument(
+        spec=spec, file=shown_path(path, root), prov=_prov(d, tree, base), execution=str(d["execution"]),
+        execution_source=str(d.get("execution_source", "")), inputs=inputs, outputs=outputs, errors=codes,
+        checks=checks, recovery=_prov(rec, tree, (*base, "recovery")), states=states, transitions=transitions,
+        on_done=on_done, rung_false=rung_false, prescan=prescan,
+        subs=tuple(sorted(subs, key=lambda s: s.sub.mnemonic)), world=world, world_prov=world_prov,
+    )
+    errors.extend(aoi_problems(doc, str(path), tree))
+    if errors:
+        raise SpecError(errors)
+    return doc
+
+
+def _world(d: Any, tree: Any) -> tuple[tuple[WorldObject, ...], Prov | None]:
+    """The optional `world` section (which chart runs each kind of object), read as written."""
+    w = d.get("world")
+    if not isinstance(w, dict):
+        return (), None
+    objects: list[WorldObject] = []
+    for i, o in enumerate(w.get("objects") or ()):
+        if not isinstance(o, dict):
+            continue
+        base = ("aoi", "world", "objects", i)
+        facts: list[WorldFact] = []
+        for j, f in enumerate(o.get("facts") or ()):
+            if not isinstance(f, dict):
+                continue
+            read = f"{f['when']}" if "when" in f else f"variable {f['variable']}" if "variable" in f else ""
+            sets = tuple(f"{_value(x.get('value'))}: {', '.join(str(e) for e in x.get('fire') or ())}"
+                         for x in f.get("set") or () if isinstance(x, dict))
+            facts.append(WorldFact(str(f.get("name", "")), read, sets, _prov(f, tree, (*base, "facts", j))))
+        objects.append(WorldObject(str(o.get("kind", "")), str(o.get("chart", "")), tuple(facts),
+                                   _prov(o, tree, base)))
+    return tuple(objects), _prov(w, tree, ("aoi", "world"))
+
+
+def aoi_problems(doc: AoiDocument, file: str, tree: Any) -> list[Diagnostic]:
+    """Duplicates the loader lets through but pages, anchors and diagram nodes cannot take."""
+    out: list[Diagnostic] = []
+
+    def unique(kind: str, key: str, values: Sequence[object]) -> None:
+        seen: dict[object, int] = {}
+        for n, v in enumerate(values):
+            if v in seen:
+                parts = ("aoi", *key.split("."), n)
+                line, col = locate(tree, parts)
+                first = f"{node_path(('aoi', *key.split('.'), seen[v]))}"
+                out.append(Diagnostic(file, line, col, node_path(parts), f"duplicate {kind} {v!r} (first at {first})"))
+            else:
+                seen[v] = n
+
+    unique("check id", "checks", [c.id for c in doc.checks])
+    unique("error code", "errors", [e.code for e in doc.errors])
+    unique("input", "inputs", [i.name for i in doc.inputs])
+    unique("output", "outputs", [o.name for o in doc.outputs])
+    unique("state id", "recovery.states", [s.state.id for s in doc.states])
+    return out
+
+
+def load_aoi_documents(paths: Sequence[Path | str] | None) -> list[AoiDocument]:
+    """Every add-on instruction that goes with the spec ``paths`` (see :func:`aoi_spec_dirs`).
+
+    All problems of all directories are raised together as one :class:`SpecError`.
+    """
+    docs: list[AoiDocument] = []
+    errors: list[Diagnostic] = []
+    for d in aoi_spec_dirs(paths):
+        try:
+            docs.append(load_aoi_document(d))
+        except SpecError as exc:
+            errors.extend(exc.diagnostics)
+    seen: dict[str, AoiDocument] = {}
+    for doc in docs:
+        if doc.id in seen:
+            errors.append(Diagnostic(doc.file, doc.prov.line, 1, "aoi.id",
+                                     f"add-on instruction {doc.id!r} is also defined in {seen[doc.id].file}"))
+        seen.setdefault(doc.id, doc)
+    if errors:
+        raise SpecError(errors)
+    return docs
+
+
+# --------------------------------------------------------------------------- wording
+
+
+def applies_text(applies: int | None) -> str:
+    return "every execution" if applies is None else f"{APPLIES_INPUT} = {applies}"
+
+
+def call_text(state: RecoveryState) -> str:
+    """``MAH on the physical axis (Ref_AxisPhy)``; with a master, ``..., master: ...``."""
+    if state.call is None:
+        return ""
+    c = state.call
+    out = f"{c.instruction} on the {AXIS_ROLES.get(c.axis, c.axis)}"
+    if c.master:
+        out += f", master: the {AXIS_ROLES.get(c.master, c.master)}"
+    return out
+
+
+def operand_lines(state: RecoveryState) -> list[str]:
+    return [f"{k} := {e.text}" for k, e in state.call.operands] if state.call else []
+
+
+def _on_done_text(o: OnDone) -> str:
+    return f"set {o.sets}" if o.when == "True" else f"if {o.when}: set {o.sets}"
+
+
+def flowchart_name(doc: AoiDocument) -> str:
+    return doc.id
+
+
+def recovery_name(doc: AoiDocument) -> str:
+    return doc.id + RECOVERY_SUFFIX
+
+
+def diagram_names(docs: Sequence[AoiDocument]) -> dict[str, tuple[AoiDocument, str]]:
+    """``motionchart diagram`` names: ``<ID>`` (flowchart) and ``<ID>_recovery`` (state diagram)."""
+    out: dict[str, tuple[AoiDocument, str]] = {}
+    for doc in docs:
+        out[flowchart_name(doc)] = (doc, "flowchart")
+        out[recovery_name(doc)] = (doc, "recovery")
+    return out
+
+
+# --------------------------------------------------------------------------- flowchart
+
+
+def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
+    """The manual-style flowchart: the ordered checks, each to its code, then the recovery branch.
+
+    Node ids: ``check_<id>`` (one decision per check, in evaluation order) with its
+    error box ``err_<id>``; ``route_<n>`` for the transitions out of the initial
+    recovery state (tried in spec order); ``state_<id>`` for the recovery states, and
+    ``err_state_<id>`` for the code of a state whose call fails.
+    """
+    nodes: list[FlowNode] = []
+    edges: list[FlowEdge] = []
+    side: list[tuple[str, str]] = []
+    spec = doc.spec
+
+    nodes.append(FlowNode("start", "terminal", ("Rung-condition-in true",)))
+    nodes.append(FlowNode("execute", "process", ("A new execution starts", "(the rung was false before)")))
+    edges.append(FlowEdge("start", "execute"))
+    prev = "execute"
+    for row in doc.checks:
+        did, eid = f"check_{row.id}", f"err_{row.id}"
+        name = doc.error_name(row.code) or row.id
+        title = [f"{row.number}. {line}" if i == 0 else line for i, line in enumerate(paragraph(name + "?", 30))]
+        if row.applies is not None:
+            title.append(f"(only when {applies_text(row.applies)})")
+        nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(row.fails, 30))))
+        nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {row.code}", *paragraph(name, 34))))
+        edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
+        edges.append(FlowEdge(did, eid, "yes"))
+        side.append((did, eid))
+        prev = did
+
+    initial = spec.initial
+    nodes.append(FlowNode("recovery", "process", ("Every check passed:", f"the recovery leaves {initial}")))
+    edges.append(FlowEdge(prev, "recovery", "no" if prev.startswith("check_") else ""))
+    prev, label = "recovery", ""
+    routes = [t for t in doc.transitions if t.source == initial]
+    for t in routes:
+        rid = f"route_{t.number}"
+        nodes.append(FlowNode(rid, "decision", (f"to {t.target}?",), tuple(wrap(t.when, 30))))
+        edges.append(FlowEdge(prev, rid, label))
+        edges.append(FlowEdge(rid, f"state_{t.target}", "yes"))
+        prev, label = rid, "no"
+    nodes.append(FlowNode("no_route", "wait", ("No branch holds:", f"stays in {initial}")))
+    edges.append(FlowEdge(prev, "no_route", label))
+
+    for row in doc.states:
+        s = row.state
+        if s.id in ("idle", initial):
+            continue
+        sid = f"state_{s.id}"
+        if s.id == "done":
+            nodes.append(FlowNode(sid, "done", ("done: Sts_PC set",), tuple(_on_done_text(o) for o in doc.on_done)))
+            continue
+        if s.call is None:
+            nodes.append(FlowNode(sid, "process", (s.id, *paragraph(row.description, 34))))
+            continue
+        sub = doc.sub(s.call.instruction)
+        title = (f"{s.id}: {s.call.instruction}" + (f" ({sub.sub.name})" if sub else ""),
+                 *paragraph(call_text(s).split(" on ", 1)[-1], 40), "Sts_IP set while it is in process")
+        nodes.append(FlowNode(sid, "process", title, tuple(operand_lines(s))))
+        eid = f"err_state_{s.id}"
+        nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {s.error}",
+                                             f"Sts_EXERR = {s.call.instruction} .ERR",
+                                             *paragraph(doc.error_name(int(s.error or 0)), 34))))
+        edges.append(FlowEdge(sid, eid, "fails"))
+        side.append((sid, eid))
+    for t in doc.transitions:
+        if t.source == initial:
+            continue
+        label = "done" if t.when == "call.done" else "" if t.when == "True" else t.when
+        edges.append(FlowEdge(f"state_{t.source}", f"state_{t.target}", label))
+
+    note = (
+        "The checks run top to bottom when an execution starts; the first that holds sets Sts_ER and its code,",
+        f"which stay until the rung goes false. A check marked with {APPLIES_INPUT} is skipped for other values.",
+        "A call's own preconditions fail with the state's code and the call's .ERR in Sts_EXERR.",
+    )
+    spine = ("start", "execute", *(f"check_{c.id}" for c in doc.checks), "recovery",
+             *(f"route_{t.number}" for t in routes), "no_route")
+    return Flowchart(doc.id, f"{doc.id}: execution with rung-condition-in true", note, tuple(nodes),
+                     tuple(edges), tuple(side), spine)
+
+
+def aoi_flowchart_dot(doc: AoiDocument) -> str:
+    return flowchart_dot(build_aoi_flowchart(doc))
+
+
+def aoi_flowchart_mermaid(doc: AoiDocument) -> str:
+    return flowchart_mermaid(build_aoi_flowchart(doc))
+
+
+# --------------------------------------------------------------------------- recovery chart
+
+_DERIVED = ("#6b6b6b", "dashed")
+_ERROR = ("#a31515", "dashed")
+
+
+def _state_compartment(doc: AoiDocument, row: StateRow) -> list[str]:
+    s = row.state
+    lines: list[str] = []
+    if s.id == doc.spec.initial:
+        lines.append(f"checks 1 to {len(doc.checks)} run here, in order" if doc.checks else "no checks")
+    if s.call is not None:
+        lines.append(f"call {call_text(s)}")
+        lines.extend(f"  {x}" for x in operand_lines(s))
+        lines.append(f"on error: Sts_ERR = {s.error}, Sts_EXERR = .ERR")
+    if s.id == "done":
+        lines.append("entry / Sts_PC = 1, Sts_IP = 0")
+        lines.extend(f"entry / {_on_done_text(o)}" for o in doc.on_done)
+    return lines
+
+
+def _transition_labels(doc: AoiDocument) -> list[str]:
+    """``[when]``, prefixed with the try order ``2:`` when a state has several transitions."""
+    out: list[str] = []
+    for t in doc.transitions:
+        siblings = [x for x in doc.transitions if x.source == t.source]
+        order = f"{siblings.index(t) + 1}: " if len(siblings) > 1 else ""
+        out.append(f"{order}[{t.when}]")
+    return out
+
+
+def _routine_lines(doc: AoiDocument) -> list[str]:
+    rf, ps = doc.rung_false, doc.prescan
+    lines = ["Rung false, from any state: back to idle;", f"clears {', '.join(rf.clear)}"]
+    if rf.abort_call:
+        lines.append(f"a call in process is stopped with {rf.abort_call}")
+    lines.append(f"Prescan: clears {', '.join(ps.clear)}")
+    if ps.forget:
+        lines.append(f"and forgets {', '.join(ps.forget)}")
+    return lines
+
+
+def recovery_dot(doc: AoiDocument) -> str:
+    """DOT text of the recovery chart: the spec's states and transitions, plus the entry
+    from ``idle``, the error exits and the rung-false rule of the execution (dashed)."""
+    spec = doc.spec
+    g = graphviz.Digraph(
+        name=f"{doc.id}_recovery",
+        graph_attr=sorted_attrs({"fontname": FONT, "fontsize": "11", "labelloc": "t", "labeljust": "l",
+                                 "rankdir": "TB", "nodesep": "0.5", "ranksep": "0.5", "pad": "0.3",
+                                 "bgcolor": "white", "newrank": "true"}),
+        node_attr=sorted_attrs({"fontname": FONT, "fontsize": "10"}),
+        edge_attr=sorted_attrs({"fontname": FONT, "fontsize": "9", "arrowsize": "0.8"}),
+    )
+    keys = [f'<FONT COLOR="#000000">{esc("———")}</FONT> {esc("spec transition [condition]")}',
+            f'<FONT COLOR="{_DERIVED[0]}">{esc("– – –")}</FONT> {esc("execution rule")}',
+            f'<FONT COLOR="{_ERROR[0]}">{esc("– – –")}</FONT> {esc("error exit")}']
+    g.attr(label=html_table([html_lines([f"{doc.id}: recovery chart"], bold=True, size=14),
+                             '<FONT POINT-SIZE="9">' + "    ".join(keys) + "</FONT>"], separators=False))
+    g.node("__initial__", label="", shape="point", width="0.16", color="black")
+    for row in doc.states:
+        s = row.state
+        rows = [html_lines([s.id], bold=True)]
+        if row.description:
+            rows.append(html_lines(paragraph(row.description, 40), size=9))
+        comp = _state_compartment(doc, row)
+        if comp:
+            rows.append(html_lines([x for line in comp for x in wrap(line, 46)], face=MONO, size=8))
+        done = s.id == "done"
+        g.node(s.id, **sorted_attrs({
+            "label": html_table(rows), "shape": "box", "style": "rounded,filled" + (",bold" if done else ""),
+            "fillcolor": "#e6f4ea" if done else "#f4f6fa", "color": "#1e7b34" if done else "#3c4a5c",
+            "margin": "0.12,0.06", "tooltip": row.description or s.id,
+        }))
+    g.node(_ERROR_NODE, **sorted_attrs({
+        "label": html_table([html_lines(["error"], bold=True),
+                             html_lines(["Sts_ER = 1, Sts_ERR = code, Sts_EXERR", "held until the rung goes false"],
+                                        size=9)]),
+        "shape": "box", "style": "filled,bold", "fillcolor": "#fde8e8", "color": "#a31515", "margin": "0.12,0.06",
+    }))
+    g.node("__routines__", **sorted_attrs({
+        "label": html_table([html_lines(_routine_lines(doc), size=9)], separators=False), "shape": "note",
+        "style": "filled", "fillcolor": "#ffffff", "color": "#8a94a6",
+    }))
+
+    def edge(tail: str, head: str, label: list[str], colour: str, style: str, tooltip: str) -> None:
+        attrs = {"color": colour, "fontcolor": colour, "style": style, "tooltip": tooltip}
+        if label:
+            attrs["label"] = "<" + html_lines(label, face=MONO, size=8, color=colour) + ">"
+        g.edge(tail, head, **sorted_attrs(attrs))
+
+    g.edge("__initial__", "idle")
+    edge("idle", spec.initial, ["rung true:", "new execution"], *_DERIVED, "new execution")
+    for t, label in zip(doc.transitions, _transition_labels(doc)):
+        edge(t.source, t.target, wrap(label, 30), "#000000", "solid", f"transition {t.number}")
+    edge(spec.initial, _ERROR_NODE, ["[a check fails]", "/ Sts_ERR = its code"], *_ERROR, "a check fails")
+    for row in doc.states:
+        s = row.state
+        if s.call is not None:
+            edge(s.id, _ERROR_NODE, [f"[{s.call.instruction} fails]", f"/ Sts_ERR = {s.error}"], *_ERROR,
+                 f"{s.call.instruction} fails")
+    with g.subgraph() as r:
+        r.attr(rank="same")
+        r.node("idle")
+        r.node("__routines__")
+    return g.source
+
+
+_MERMAID_ERROR = "error_exit"  # cannot clash with a spec state: ``_mid`` gives ``s_<id>``
+
+
+def _mid(state_id: str) -> str:
+    return f"s_{state_id}"
+
+
+def recovery_mermaid(doc: AoiDocument) -> str:
+    """The recovery chart as Mermaid ``stateDiagram-v2`` (same facts as :func:`recovery_dot`)."""
+    spec = doc.spec
+    title = f"{doc.id}: recovery chart".replace('"', '\\"')
+    out = ["---", f'title: "{title}"', "---", "stateDiagram-v2", f"{INDENT}direction TB",
+           f"{INDENT}[*] --> {_mid('idle')}"]
+    for row in doc.states:
+        s = row.state
+        out.append(f'{INDENT}state "{text(s.id)}" as {_mid(s.id)}')
+        for line in ([row.description] if row.description else []) + _state_compartment(doc, row):
+            out.append(f"{INDENT}{_mid(s.id)} : {text(line.strip())}")
+    out.append(f'{INDENT}state "error" as {_MERMAID_ERROR}')
+    out.append(f"{INDENT}{_MERMAID_ERROR} : {text('Sts_ER = 1, Sts_ERR = code, Sts_EXERR; held until the rung goes false')}")
+    out.append(f"{INDENT}{_mid('idle')} --> {_mid(spec.initial)} : {text('rung true: new execution')}")
+    for t, label in zip(doc.transitions, _transition_labels(doc)):
+        out.append(f"{INDENT}{_mid(t.source)} --> {_mid(t.target)} : {text(label)}")
+    out.append(f"{INDENT}{_mid(spec.initial)} --> {_MERMAID_ERROR} : {text('[a check fails] / Sts_ERR = its code')}")
+    for row in doc.states:
+        s = row.state
+        if s.call is not None:
+            label = f"[{s.call.instruction} fails] / Sts_ERR = {s.error}"
+            out.append(f"{INDENT}{_mid(s.id)} --> {_MERMAID_ERROR} : {text(label)}")
+    out.append(f"{INDENT}note right of {_mid('idle')}")
+    out.extend(f"{INDENT * 2}{text(line)}" for line in _routine_lines(doc))
+    out.append(f"{INDENT}end note")
+    out.append(f"{INDENT}classDef errorState fill:#fde8e8,stroke:#a31515,stroke-width:2px")
+    out.append(f"{INDENT}class {_MERMAID_ERROR} errorState")
+    out.append(f"{INDENT}classDef doneState fill:#e6f4ea,stroke:#1e7b34,stroke-width:2px")
+    out.append(f"{INDENT}class {_mid('done')} doneState")
+    return "\n".join(out) + "\n"
+
+
+# --------------------------------------------------------------------------- reference page
+
+
+def page_path(doc: AoiDocument) -> str:
+    return f"aoi/{doc.id}.md"
+
+
+def _where(doc: AoiDocument, prov: Prov, file: str | None = None) -> str:
+    return f"`{file or doc.file}:{prov.line}`"
+
+
+def _interp(prov: Prov, p: str) -> str:
+    return interp_link(prov.interpretation, p)
+
+
+def _diagram(svg: str, mmd: str, mmd_link: str, dot_link: str, alt: str) -> list[str]:
+    return [f"![{alt}]({svg})", "", f"Sources: [Graphviz DOT]({dot_link}), [Mermaid]({mmd_link}).", "",
+            "<details><summary>Mermaid version (GitHub renders it without Graphviz)</summary>", "", "```mermaid",
+            mmd.rstrip("\n"), "```", "", "</details>"]
+
+
+def _value(v: object) -> str:
+    if v is None:
+        return "—"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return str(v)
+
+
+def reported_by(doc: AoiDocument, code_: int, p: str = "") -> list[str]:
+    """Links to what reports ``code_``: checks (``#check-<id>``) and recovery states (``#state-<id>``)."""
+    out = [f"[check {c.number} `{c.id}`]({p}#{anchor('check-' + c.id)})" for c in doc.checks if c.code == code_]
+    out += [f"[state `{s.state.id}`]({p}#{anchor('state-' + s.state.id)}) ({s.state.call.instruction} fails)"
+            for s in doc.states if s.state.call is not None and s.state.error == code_]
+    return out
+
+
+def aoi_page(doc: AoiDocument, tr: Traceability, catalog: dict[int, str] | None = None,
+             charts: Sequence[str] = ()) -> str:
+    """The Markdown reference page of one add-on instruction (``aoi/<ID>.md``).
+
+    ``catalog`` maps a motion instruction's ``.ERR`` code to its name (the main spec's
+    error catalog); codes in it link to ``error-codes.md``.  ``charts``: the chart ids
+    that have a page (``charts/<id>.md``), linked from the world section.
+    """
+    p = "../"
+    cat = catalog or {}
+    traced = tr.root is not None
+    fc, rc = flowchart_name(doc), recovery_name(doc)
+    sub_files = sorted({s.file.rsplit("/", 1)[0] + "/" for s in doc.subs})
+    out = [GENERATED_NOTE, "", f"# {doc.id} (add-on instruction)", "",
+           "An add-on instruction: a routine with its own backing tag (the `Sts_` members below) that "
+           "checks its inputs and the device handler in a fixed order, reports the first failure as its own "
+           "code, and otherwise runs a recovery made of calls to motion instructions. This page is drawn from "
+           "the spec files named below; every row gives its documentary source and the spec line it is "
+           "defined at.", ""]
+    out += [f"- Source: {cell(doc.prov.source)}"]
+    if doc.prov.interpretation:
+        out += [f"- Interpretation: {_interp(doc.prov, p)}"]
+    out += [
+        f"- Execution: {doc.execution}" + (f" ({cell(doc.execution_source)})" if doc.execution_source else ""),
+        f"- Defined at: `{doc.file}`; the motion instructions it calls: "
+        + ", ".join(f"`{d}`" for d in sub_files),
+        f"- Counts: {len(doc.inputs)} inputs, {len(doc.outputs)} status members, {len(doc.checks)} ordered checks, "
+        f"{len(doc.errors)} error codes, {len(doc.states)} recovery states, {len(doc.transitions)} transitions, "
+        f"{len(doc.subs)} sub-instructions",
+        "- The model behind it (world, scan order, scenarios) is described in `docs/aoi.md`.",
+        "", "## Flowchart", "",
+    ]
+    out += _diagram(f"{p}flowcharts/{fc}.svg", aoi_flowchart_mermaid(doc), f"{p}flowcharts/{fc}.mmd",
+                    f"{p}flowcharts/{fc}.dot", f"Flowchart of {doc.id}")
+
+    out += ["", "## Inputs", ""]
+    out += table(["Input", "Kind", "Data type", "Default", "Source", "Interpretation", "Defined at"], [
+        [f"`{i.name}`", i.type, f"`{i.data_type}`" if i.data_type else "—", cell(_value(i.default)),
+         cell(i.prov.source), _interp(i.prov, p), _where(doc, i.prov)]
+        for i in doc.inputs
+    ])
+    out += ["", "## Outputs (status members)", ""]
+    out += table(["Member", "Type", "Source", "Interpretation", "Defined at"], [
+        [f"`{o.name}`", o.type, cell(o.prov.source), _interp(o.prov, p), _where(doc, o.prov)] for o in doc.outputs
+    ])
+
+    out += ["", "## Checks, in the order they run", "",
+            "When an execution starts (the rung goes true after being false) the checks are tried from the "
+            "top. The first whose condition holds ends the execution: `Sts_ER` is set and `Sts_ERR` takes the "
+            "check's code. A check with a value in *Applies to* is skipped when "
+            f"`{APPLIES_INPUT}` has another value. When no check holds, the recovery chart takes over.", ""]
+    out += table(["#", "Check", "Code", "Applies to", "Fails when", "Error", "Source", "Interpretation",
+                  "Defined at"], [
+        [str(c.number), f'<a id="{anchor("check-" + c.id)}"></a>`{c.id}`',
+         f"[{c.code}](#{anchor('code-' + str(c.code))})",
+         "all" if c.applies is None else f"`{APPLIES_INPUT} = {c.applies}`", code(c.fails),
+         cell(doc.error_name(c.code)), cell(c.prov.source), _interp(c.prov, p), _where(doc, c.prov)]
+        for c in doc.checks
+    ])
+
+    out += ["", "## Error codes", "",
+            "Every code the instruction reports in `Sts_ERR`, by number. A code reported by a recovery state "
+            "comes with the failing call's own `.ERR` in `Sts_EXERR`."
+            + (" *Scenarios* lists the add-on instruction scenarios that observed the code with `Sts_ER` set."
+               if traced else ""), ""]
+    rows = []
+    for e in sorted(doc.errors, key=lambda e: e.code):
+        rows.append([f'<a id="{anchor("code-" + str(e.code))}"></a>{e.code}', cell(e.name),
+                     ", ".join(reported_by(doc, e.code)) or "— (reported by nothing)", cell(e.prov.source),
+                     _interp(e.prov, p), _where(doc, e.prov)]
+                    + ([scenario_links(tr.aoi_producing(e.code), p, 3, tr.link_base)] if traced else []))
+    out += table(["Code", "Name", "Reported by", "Source", "Interpretation", "Defined at"]
+                 + (["Scenarios"] if traced else []), rows)
+
+    out += ["", "## Recovery chart", "",
+            f"Once every check has passed, the execution leaves `{doc.spec.initial}` by the first transition "
+            "whose condition holds (transitions are tried in the order listed) and moves from state to state. "
+            "A state with a call issues one motion instruction; its preconditions are checked first, and the "
+            "first that fails ends the execution with the state's code. A call is complete when "
+            "`call.done` holds. Dashed edges in the diagram are execution rules rather than spec transitions: "
+            "a rung that goes true in `idle` starts an execution, and a rung that goes false returns to `idle` "
+            "from any state.", ""]
+    out += [f"Source: {cell(doc.recovery.source)}"
+            + (f"; interpretation {_interp(doc.recovery, p)}" if doc.recovery.interpretation else "") + ".", ""]
+    out += _diagram(f"{p}diagrams/{rc}.svg", recovery_mermaid(doc), f"{p}diagrams/{rc}.mmd",
+                    f"{p}diagrams/{rc}.dot", f"Recovery chart of {doc.id}")
+    out += ["", "### States", ""]
+    if traced:
+        out += ["*Scenarios observing it* lists the scenarios in which some instance was in the state at the end "
+                "of a scan. A state left in the scan it was entered (checking, a call that completes at once) "
+                "is passed through without being observed, so *none* there is no gap in the scenarios.", ""]
+    out += table(["State", "Meaning", "Call", "Operands", "Code if the call fails", "Source", "Interpretation",
+                  "Defined at"] + (["Scenarios observing it"] if traced else []), [
+        [f'<a id="{anchor("state-" + r.state.id)}"></a>`{r.state.id}`'
+         + (" (entered first)" if r.state.id == doc.spec.initial else ""),
+         cell(r.description),
+         (f"[{r.state.call.instruction}](#{anchor('sub-' + r.state.call.instruction)}) on the "
+          + cell(call_text(r.state).split(" on the ", 1)[1])) if r.state.call else "—",
+         code("; ".join(operand_lines(r.state))) if r.state.call and r.state.call.operands else "—",
+         f"[{r.state.error}](#{anchor('code-' + str(r.state.error))})" if r.state.error is not None else "—",
+         cell(r.prov.source), _interp(r.prov, p), _where(doc, r.prov)]
+        + ([scenario_links(tr.aoi_reaching(r.state.id), p, 3, tr.link_base)] if traced else [])
+        for r in doc.states
+    ])
+    out += ["", "### Transitions", ""]
+    out += table(["#", "From", "To", "When", "Source", "Interpretation", "Defined at"], [
+        [str(t.number), f"`{t.source}`", f"`{t.target}`", code(t.when), cell(t.prov.source), _interp(t.prov, p),
+         _where(doc, t.prov)]
+        for t in doc.transitions
+    ])
+
+    out += ["", "## Sub-instructions", "",
+            "The motion instructions the recovery calls, as the model runs them: preconditions in order "
+            "(the first that holds makes the call fail with that `.ERR`, which the add-on instruction reports "
+            "in `Sts_EXERR`), then how the call completes.", ""]
+    for s in doc.subs:
+        sub = s.sub
+        users = [r.state.id for r in doc.states if r.state.call and r.state.call.instruction == sub.mnemonic]
+        called_by = ", ".join(f"[`{u}`](#{anchor('state-' + u)})" for u in users)
+        roles = []
+        if doc.rung_false.abort_call == sub.mnemonic:
+            roles.append("stops a call in process when the rung goes false")
+        out += [f'<a id="{anchor("sub-" + sub.mnemonic)}"></a>', "", f"### {sub.mnemonic}: {sub.name}", ""]
+        out += [f"- Source: {cell(s.prov.source)}"
+                + (f"; interpretation {_interp(s.prov, p)}" if s.prov.interpretation else ""),
+                f"- Axis data types: {', '.join(f'`{t}`' for t in s.axis_types) or '—'}",
+                f"- Called by: {called_by or '—'}"
+                + (f"; {'; '.join(roles)}" if roles else ""),
+                f"- Completes: {sub.kind}" + (f" after {sub.scans} scans" if sub.kind == 'home' else "")
+                + f" ({cell(s.completes.source)}"
+                + (f"; {_interp(s.completes, p)}" if s.completes.interpretation else "") + ")",
+                f"- Defined at: `{s.file}`", ""]
+        if not s.checks:
+            out += ["No preconditions: in the model this call cannot fail.", ""]
+            continue
+        out += table(["#", "Fails when", ".ERR", "Name", "Source", "Interpretation", "Defined at"], [
+            [str(c.number), code(c.fails),
+             f"[{c.err}]({p}error-codes.md#{anchor('err-' + str(c.err))})" if c.err in cat else str(c.err),
+             f"`{cat[c.err]}`" if c.err in cat else "—", cell(c.prov.source), _interp(c.prov, p),
+             _where(doc, c.prov, s.file)]
+            for c in s.checks
+        ])
+        out += [""]
+
+    out += ["## Completion, rung false and prescan", "",
+            "When the recovery reaches `done`, `Sts_PC` is set, `Sts_IP` cleared and the following facts are "
+            "recorded, each when its condition holds:", ""]
+    out += table(["When", "Sets", "Source", "Interpretation", "Defined at"], [
+        ["always" if o.when == "True" else code(o.when), f"`{o.sets}`", cell(o.prov.source), _interp(o.prov, p),
+         _where(doc, o.prov)]
+        for o in doc.on_done
+    ])
+    rf, ps = doc.rung_false, doc.prescan
+    out += ["", "| Routine | Clears | Also | Source | Interpretation | Defined at |", "|---|---|---|---|---|---|",
+            f"| rung false (EnableIn false) | {', '.join(f'`{x}`' for x in rf.clear) or '—'} | "
+            + (f"a call in process is stopped with [{rf.abort_call}](#{anchor('sub-' + rf.abort_call)}); "
+               if rf.abort_call else "")
+            + f"members not listed keep their values | {cell(rf.prov.source)} | {_interp(rf.prov, p)} | "
+            f"{_where(doc, rf.prov)} |",
+            f"| prescan | {', '.join(f'`{x}`' for x in ps.clear) or '—'} | "
+            + (f"forgets {', '.join(f'`{x}`' for x in ps.forget)}; " if ps.forget else "")
+            + f"runs after the rung-false routine | {cell(ps.prov.source)} | {_interp(ps.prov, p)} | "
+            f"{_where(doc, ps.prov)} |"]
+    if traced:
+        out += ["", f"Scenarios that complete it (`Sts_PC` observed): "
+                    f"{scenario_links(tr.aoi_completing(), p, base=tr.link_base)}"]
+    if doc.world:
+        out += _world_section(doc, p, charts)
+    return "\n".join(out) + "\n"
+
+
+def _world_section(doc: AoiDocument, p: str, charts: Sequence[str]) -> list[str]:
+    wp = doc.world_prov
+    out = ["", "## The world it runs in", "",
+           "The handler and the axes the instruction reads are run by charts of the specification. Each fact "
+           "the checks and calls read (`phy.faulted`, `handler.mode`, ...) is read from its object's chart as "
+           "shown; *Set by* lists the chart events a scenario's `set:` of that fact fires.", ""]
+    if wp is not None:
+        out += [f"Source: {cell(wp.source)}" + (f"; interpretation {_interp(wp, p)}" if wp.interpretation else "")
+                + f". Defined at {_where(doc, wp)}.", ""]
+    out += table(["Object", "Chart", "Facts", "Source", "Interpretation", "Defined at"], [
+        [f'<a id="{anchor("world-" + o.kind)}"></a>`{o.kind}`',
+         f"[{o.chart}]({p}charts/{o.chart}.md)" if o.chart in charts else f"`{o.chart}`",
+         str(len(o.facts)), cell(o.prov.source), _interp(o.prov, p), _where(doc, o.prov)]
+        for o in doc.world
+    ])
+    out += ["", "| Object | Fact | Read from | Set by | Source | Interpretation | Defined at |",
+            "|---|---|---|---|---|---|---|"]
+    for o in doc.world:
+        for f in o.facts:
+            out.append(f"| `{o.kind}` | `{f.name}` | {code(f.read)} | {cell('; '.join(f.sets))} | "
+                       f"{cell(f.prov.source)} | {_interp(f.prov, p)} | {_where(doc, f.prov)} |")
+    return out
+
+
+def aoi_uses(doc: AoiDocument) -> dict[str, list[Use]]:
+    """Every element of the add-on instruction that cites an interpretation, for ``interpretations.md``."""
+    page = page_path(doc)
+    uses: dict[str, list[Use]] = {}
+
+    def add(prov: Prov, label: str, link: str) -> None:
+        if prov.interpretation:
+            uses.setdefault(prov.interpretation, []).append(Use(prov.interpretation, label, link))
+
+    add(doc.prov, f"add-on instruction {doc.id}", page)
+    for i in doc.inputs:
+        add(i.prov, f"{doc.id} input {i.name}", f"{page}#inputs")
+    for o in doc.outputs:
+        add(o.prov, f"{doc.id} output {o.name}", f"{page}#outputs-status-members")
+    for e in doc.errors:
+        add(e.prov, f"{doc.id} error code {e.code}", f"{page}#{anchor('code-' + str(e.code))}")
+    for c in doc.checks:
+        add(c.prov, f"{doc.id} check {c.id}", f"{page}#{anchor('check-' + c.id)}")
+    add(doc.recovery, f"{doc.id} recovery chart", f"{page}#recovery-chart")
+    for s in doc.states:
+        add(s.prov, f"{doc.id} recovery state {s.state.id}", f"{page}#{anchor('state-' + s.state.id)}")
+    for t in doc.transitions:
+        add(t.prov, f"{doc.id} transition {t.source} -> {t.target}", f"{page}#transitions")
+    for n, o in enumerate(doc.on_done, start=1):
+        add(o.prov, f"{doc.id} on done {n} (set {o.sets})", f"{page}#completion-rung-false-and-prescan")
+    add(doc.rung_false.prov, f"{doc.id} rung-false routine", f"{page}#completion-rung-false-and-prescan")
+    add(doc.prescan.prov, f"{doc.id} prescan routine", f"{page}#completion-rung-false-and-prescan")
+    if doc.world_prov is not None:
+        add(doc.world_prov, f"{doc.id} world", f"{page}#the-world-it-runs-in")
+    for o in doc.world:
+        link = f"{page}#{anchor('world-' + o.kind)}"
+        add(o.prov, f"{doc.id} world object {o.kind} ({o.chart})", link)
+        for f in o.facts:
+            add(f.prov, f"{doc.id} world fact {o.kind}.{f.name}", link)
+    for s in doc.subs:
+        link = f"{page}#{anchor('sub-' + s.sub.mnemonic)}"
+        add(s.prov, f"sub-instruction {s.sub.mnemonic}", link)
+        add(s.completes, f"sub-instruction {s.sub.mnemonic} completion", link)
+        for c in s.checks:
+            add(c.prov, f"sub-instruction {s.sub.mnemonic} precondition {c.number} (.ERR {c.err})", link)
+    return uses
+
+
+def index_rows(docs: Sequence[AoiDocument]) -> list[list[str]]:
+    """Rows of the index page's add-on instruction table."""
+    return [
+        [f"[{d.id}]({page_path(d)})", str(len(d.checks)), str(len(d.errors)), str(len(d.states)),
+         ", ".join(s.sub.mnemonic for s in d.subs),
+         f"[flowchart](flowcharts/{flowchart_name(d)}.svg) ([dot](flowcharts/{flowchart_name(d)}.dot) · "
+         f"[mermaid](flowcharts/{flowchart_name(d)}.mmd)) · [recovery chart](diagrams/{recovery_name(d)}.svg) "
+         f"([dot](diagrams/{recovery_name(d)}.dot) · [mermaid](diagrams/{recovery_name(d)}.mmd))",
+         f"`{d.file}`"]
+        for d in docs
+    ]
+
+
+INDEX_HEADER = ("Add-on instruction", "Checks", "Codes", "Recovery states", "Calls", "Diagrams", "Spec file")
+
+
+__all__ = [
+    "APPLIES_INPUT",
+    "AoiDocument",
+    "INDEX_HEADER",
+    "aoi_flowchart_dot",
+    "aoi_flowchart_mermaid",
+    "aoi_page",
+    "aoi_problems",
+    "aoi_spec_dirs",
+    "aoi_uses",
+    "build_aoi_flowchart",
+    "diagram_names",
+    "flowchart_name",
+    "index_rows",
+    "load_aoi_document",
+    "load_aoi_documents",
+    "page_path",
+    "recovery_dot",
+    "recovery_mermaid",
+    "recovery_name",
+]

@@ -1,0 +1,236 @@
+"""``motionchart validate`` loads the add-on instruction (``spec/aoi/``) and its sub-instructions.
+
+What is checked: the extra summary line and its counts (17 ordered checks and 21 codes
+are typed in from 003 §1.3.2 / §2.4 and docs/aoi.md, not read from the spec); the
+``--json`` record; and that a broken add-on instruction or sub-instruction file in a
+copy of the spec gives located ``file:line:col: path: message`` lines on standard
+error, the error count, exit 1, nothing on standard output and no traceback, also
+through the installed console script and for ``generate`` and ``diagram``.  The line
+of each diagnostic is found by a marker unique to the change.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from checker.cli import main
+from statecharts.aoi import bundled_aoi
+from statecharts.loader import bundled_spec_dir
+
+DIAGNOSTIC = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<rest>.*)$")
+AOI_ID = "raM_Opr_SyncPthPhyAx_CD"
+#: 003 §1.3.2 has 17 rows with a code once 1017 is placed (docs/aoi.md); §2.4 lists 21 codes.
+DOCUMENTED_CHECKS = 17
+DOCUMENTED_CODES = 21
+#: MAH, MAM, MAG, MRP and MAS (docs/aoi.md, "the recovery chart").
+DOCUMENTED_SUBS = 5
+MOTIONCHART = Path(sys.executable).with_name("motionchart")
+
+
+def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:
+    rc = main(list(argv))
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def diagnostics(err: str) -> list[re.Match[str]]:
+    return [m for m in (DIAGNOSTIC.match(line) for line in err.splitlines()) if m is not None]
+
+
+def line_of(path: Path, marker: str) -> int:
+    lines = [i for i, t in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if marker in t]
+    assert len(lines) == 1, lines
+    return lines[0]
+
+
+@pytest.fixture
+def spec_copy(tmp_path: Path) -> Path:
+    d = tmp_path / "spec"
+    shutil.copytree(bundled_spec_dir(), d, ignore=shutil.ignore_patterns("__pycache__", "*.py", "schema"))
+    return d
+
+
+def aoi_file(spec_dir: Path) -> Path:
+    (path,) = sorted((spec_dir / "aoi").glob("*.yaml"))
+    return path
+
+
+def edit(path: Path, old: str, new: str) -> Path:
+    text = path.read_text(encoding="utf-8")
+    assert text.count(old) == 1, old
+    path.write_text(text.replace(old, new), encoding="utf-8")
+    return path
+
+
+def assert_located(rc: int, out: str, err: str, file: Path, line: int, *words: str) -> None:
+    assert rc == 1 and out == "", (out, err)
+    assert "Traceback" not in err
+    found = diagnostics(err)
+    assert found, err
+    hits = [m for m in found if m["file"] == str(file) and int(m["line"]) == line]
+    assert hits, f"no diagnostic at {file}:{line} in\n{err}"
+    for w in words:
+        assert any(w in m["rest"] for m in hits), (w, err)
+    assert err.rstrip().endswith(f"{len(found)} error(s)")
+
+
+# --------------------------------------------------------------------------- the summary
+
+
+def test_validate_prints_the_add_on_instruction_line(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, err = run(capsys, "validate")
+    assert (rc, err) == (0, "")
+    first, second = out.splitlines()
+    assert first.startswith("spec OK: ")
+    aoi = bundled_aoi()
+    assert (len(aoi.checks), len(aoi.errors), len(aoi.instructions)) == (
+        DOCUMENTED_CHECKS, DOCUMENTED_CODES, DOCUMENTED_SUBS)
+    assert second == (f"add-on instructions: 1 ({DOCUMENTED_CHECKS} checks, {DOCUMENTED_CODES} codes, "
+                      f"{len(aoi.states)} recovery states, {len(aoi.transitions)} transitions), "
+                      f"{DOCUMENTED_SUBS} sub-instructions")
+
+
+def test_validate_directory_loads_its_own_add_on_instruction(capsys: pytest.CaptureFixture[str],
+                                                             spec_copy: Path) -> None:
+    # one check fewer in the copy: the count printed is the copy's, not the bundled one's
+    edit(aoi_file(spec_copy), "    - {id: speed, code: 1017,", "    - {id: speed_gone, code: 1017,")
+    text = aoi_file(spec_copy).read_text(encoding="utf-8")
+    kept = [line for line in text.splitlines() if "{id: speed_gone," not in line]
+    aoi_file(spec_copy).write_text("\n".join(kept) + "\n", encoding="utf-8")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert (rc, err) == (0, "")
+    assert f"add-on instructions: 1 ({DOCUMENTED_CHECKS - 1} checks, {DOCUMENTED_CODES} codes" in out
+
+
+def test_validate_json_lists_the_add_on_instruction(capsys: pytest.CaptureFixture[str]) -> None:
+    rc, out, _ = run(capsys, "validate", "--json")
+    assert rc == 0
+    doc = json.loads(out)
+    (aoi,) = doc["add_on_instructions"]
+    assert aoi["id"] == AOI_ID and aoi["file"] == "spec/aoi/sync_pth_phy_ax.yaml"
+    assert (aoi["checks"], aoi["error_codes"]) == (DOCUMENTED_CHECKS, DOCUMENTED_CODES)
+    assert sorted(aoi["sub_instructions"]) == ["MAG", "MAH", "MAM", "MAS", "MRP"]
+
+
+def test_a_spec_file_alone_has_no_add_on_instruction(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    # a file (not a directory) names no aoi/ folder: only the main loader speaks
+    f = tmp_path / "one.yaml"
+    f.write_text("format: motionchart-spec/1\n", encoding="utf-8")
+    rc, out, err = run(capsys, "validate", str(f))
+    assert rc == 1 and out == "" and "add-on" not in err and "Traceback" not in err
+
+
+# --------------------------------------------------------------------------- broken add-on instruction files
+
+
+def test_malformed_aoi_yaml_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
+    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level: zz_mark\n")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert_located(rc, out, err, path, line_of(path, "zz_mark"), "YAML syntax error")
+    assert len(diagnostics(err)) == 1  # the main loader reads the file too: one report, not two
+
+
+@pytest.mark.parametrize(("old", "new", "marker", "words"), [
+    ("  execution: level\n", "  execution: level\n  zz_unknown: 1\n", "zz_unknown", ("aoi.zz_unknown", "unknown key")),
+    ('fails: "handler.eState != 7"', 'fails: "handler.eState !=== 7"', "!===",
+     ("aoi.checks[1].fails", "bad expression")),
+    ('fails: "handler.eState != 7"', 'fails: "hndlr_zz.eState != 7"', "hndlr_zz",
+     ("aoi.checks[1].fails", "unknown name")),
+    ("{id: handler_running, code: 1001,", "{id: handler_running, code: 9901,", "9901",
+     ("aoi.checks[1].code", "9901")),
+    ("{from: homing, to: moving,", "{from: homing_zz, to: moving,", "homing_zz",
+     ("aoi.recovery.transitions[4].from", "unknown state")),
+    ("call: {instruction: MAH, axis: phy}", "call: {instruction: MZZ, axis: phy}", "MZZ",
+     ("aoi.recovery.states[4].call", "unknown sub-instruction")),
+    # the loader lets a repeated check id through; anchors and diagram nodes cannot take it
+    ("{id: handler_running, code: 1001,", "{id: registered, code: 1001,", "{id: registered, code: 1001,",
+     ("aoi.checks[1]", "duplicate check id 'registered'")),
+])
+def test_bad_aoi_content_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path, old: str,
+                                            new: str, marker: str, words: tuple[str, ...]) -> None:
+    path = edit(aoi_file(spec_copy), old, new)
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert_located(rc, out, err, path, line_of(path, marker), *words)
+
+
+def test_bad_aoi_json_output(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
+    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown: 1\n")
+    rc, out, _ = run(capsys, "validate", "--json", str(spec_copy))
+    assert rc == 1
+    doc = json.loads(out)
+    assert doc["valid"] is False
+    (d,) = doc["diagnostics"]
+    assert (d["file"], d["line"], d["path"]) == (str(path), line_of(path, "zz_unknown"), "aoi.zz_unknown")
+
+
+def test_empty_aoi_file_is_reported(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
+    path = aoi_file(spec_copy)
+    path.write_text("", encoding="utf-8")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert_located(rc, out, err, path, 1, "empty")
+
+
+def test_missing_aoi_file_is_reported_against_the_given_directory(capsys: pytest.CaptureFixture[str],
+                                                                  spec_copy: Path) -> None:
+    aoi_file(spec_copy).rename(spec_copy / "aoi" / "moved.txt")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert rc == 1 and out == "" and "Traceback" not in err
+    assert f"{spec_copy / 'aoi'}:1:1: expected one add-on instruction file, found 0" in err
+    assert str(bundled_spec_dir()) not in err
+
+
+def test_bad_sub_instruction_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
+    path = edit(spec_copy / "instructions" / "motion" / "MAM.yaml", "err: 17,", "err: -17,")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert_located(rc, out, err, path, line_of(path, "err: -17,"), "instruction.checks[1].err")
+
+
+def test_aoi_and_main_spec_errors_are_reported_together(capsys: pytest.CaptureFixture[str],
+                                                        spec_copy: Path) -> None:
+    aoi = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown: 1\n")
+    main_file = sorted((spec_copy / "instructions").glob("*.yaml"))[0]
+    edit(main_file, "\ninstruction:\n", "\ninstruction:\n  zz_bogus: 1\n")
+    rc, out, err = run(capsys, "validate", str(spec_copy))
+    assert rc == 1 and out == ""
+    files = {m["file"] for m in diagnostics(err)}
+    assert {str(aoi), str(main_file)} <= files
+    assert err.rstrip().endswith("2 error(s)")
+
+
+def test_generate_and_diagram_report_a_broken_aoi(capsys: pytest.CaptureFixture[str], spec_copy: Path,
+                                                  tmp_path: Path) -> None:
+    path = edit(aoi_file(spec_copy), 'fails: "handler.eState != 7"', 'fails: "hndlr_zz.eState != 7"')
+    line = line_of(path, "hndlr_zz")
+    rc, out, err = run(capsys, "generate", "-o", str(tmp_path / "gen"), "--spec", str(spec_copy),
+                       "--scenarios", str(tmp_path))
+    assert rc == 1 and "Traceback" not in err and f"{path}:{line}:" in err
+    rc, out, err = run(capsys, "diagram", AOI_ID, "--spec", str(spec_copy))
+    assert rc == 1 and out == "" and f"{path}:{line}:" in err
+    # a chart of the main spec does not need the add-on instruction
+    rc, out, err = run(capsys, "diagram", "AxisNonCIP", "--spec", str(spec_copy))
+    assert rc == 0 and out.startswith("digraph")
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
+    env.update(extra)
+    return env
+
+
+@pytest.mark.skipif(not MOTIONCHART.exists(), reason="console script not installed next to this python")
+def test_console_script_reports_a_broken_aoi_without_traceback(spec_copy: Path, tmp_path: Path) -> None:
+    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown§: 1\n")
+    proc = subprocess.run([str(MOTIONCHART), "validate", str(spec_copy)], capture_output=True, text=True,
+                          env=_env(PYTHONIOENCODING="ascii"), timeout=120, cwd=tmp_path)
+    assert proc.returncode == 1 and proc.stdout == ""
+    assert "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(f"{path}:{line_of(path, 'zz_unknown')}:")
+    assert proc.stderr.rstrip().endswith("1 error(s)")

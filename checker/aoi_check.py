@@ -28,14 +28,15 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
+from checker.search import _progress_wanted
+from statecharts.aoi import _obj
 from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
 from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
 from statecharts.loader import _plain, read_yaml, schema_diagnostics
@@ -46,10 +47,6 @@ PROGRESS_EVERY = 2000
 _SOURCE = {"type": "string", "minLength": 1}
 _ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_.]*$"}
 _VALUES = {"type": "array", "minItems": 1, "items": {"type": ["boolean", "integer", "number", "string"]}}
-
-
-def _obj(required: Sequence[str], props: Mapping[str, Any]) -> dict[str, Any]:
-    return {"type": "object", "additionalProperties": False, "required": list(required), "properties": dict(props)}
 
 
 AOI_SYSTEM_SCHEMA: dict[str, Any] = {
@@ -182,6 +179,7 @@ def load_aoi_system(path: Path | str, spec: Any) -> AoiSystem:
             continue
         inputs.append((k, tuple(values)))
     environment: list[tuple[str, str, tuple[object, ...]]] = []
+    pristine = world.snapshot()
     for obj, fields in doc.get("environment", {}).items():
         if obj not in world.handlers and obj not in world.axes:
             err(("environment", obj), f"unknown handler or axis {obj!r}; setup has: "
@@ -189,13 +187,14 @@ def load_aoi_system(path: Path | str, spec: Any) -> AoiSystem:
             continue
         for k, values in fields.items():
             for i, v in enumerate(values):
-                probe_world = build_world(spec, setup)
+                world.restore(pristine)
                 try:
-                    probe_world.set(obj, k, v)
+                    world.set(obj, k, v)
                 except (AttributeError, KeyError, TypeError, ValueError) as exc:
                     err(("environment", obj, k, i), f"{obj}.{k} cannot be set to {v!r}: {exc}")
                     break
             environment.append((obj, k, tuple(values)))
+    world.restore(pristine)
     env = observation_env(world, inst)
     known = frozenset(env)
 
@@ -335,10 +334,6 @@ def _apply(world: Any, system: AoiSystem, move: Move, rung: bool) -> bool:
         world.instances[system.instance].inputs[move.field] = move.value
     world.scan({system.instance: rung})
     return rung
-
-
-def _progress_wanted() -> bool:
-    return sys.stderr.isatty() and os.environ.get("CI", "").lower() not in ("true", "1")
 
 
 def explore_aoi(system: AoiSystem, spec: Any, *, max_states: int | None = None, max_seconds: float | None = None,

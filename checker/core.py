@@ -173,6 +173,8 @@ class CompiledModel:
         self._join: list[dict[tuple[int, tuple[int, ...], tuple[str, ...]], int]] = [{} for _ in model.axes]
         self._split: list[tuple[int, tuple[int, ...], tuple[str, ...]]] = []
         self._reads_axis = [s.reads_axis for s in model.slots]
+        self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
+        self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
         self._block_memo: list[dict[tuple[object, ...], tuple[object, ...]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
 
@@ -430,12 +432,67 @@ class CompiledModel:
 
     # ------------------------------------------------------------------ the scan of one axis block
 
-    def _block(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object
+    def inert(self, ti: int, tid: int) -> bool:
+        """An inert tag takes no part in a scan: rung low, nothing pending, and its
+        rung-false row changes nothing and does not execute."""
+        memo = self._inert[ti]
+        v = memo.get(tid)
+        if v is None:
+            rr = self._rows[ti].get(tid * 3)
+            if rr is None:
+                rr = self.piece_row(ti, tid, 0)
+            v = not self._rung[tid] and not self._pending[tid] and rr == (tid, False)
+            memo[tid] = v
+        return v
+
+    def quiet(self, ti: int, tid: int) -> bool:
+        """An inert tag whose post-scan evaluation is the identity whatever its axis does."""
+        memo = self._quiet[ti]
+        v = memo.get(tid)
+        if v is None:
+            v = False
+            if not self._reads_axis[ti]:
+                p = self._tag_post[ti].get((tid, False, -1))
+                if p is None:
+                    p = self.piece_tag_post(ti, self.model.slots[ti].axis_index, tid, False, -1)
+                v = p == (tid, (), ())
+            memo[tid] = v
+        return v
+
+    def context(self, ai: int, state: Sequence[int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """(tags that take part in a scan, inert tags whose properties must still be
+        evaluated) of axis ``ai``'s block in ``state``, as local tag numbers."""
+        start = self.block_start[ai] + 1
+        active: list[int] = []
+        watch: list[int] = []
+        for j, ti in enumerate(self.tis[ai]):
+            tid = state[start + j]
+            if not self.inert(ti, tid):
+                active.append(j)
+            elif not self.quiet(ti, tid):
+                watch.append(j)
+        return tuple(active), tuple(watch)
+
+    def _block(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object,
+               active: tuple[int, ...] | None = None, watch: tuple[int, ...] = ()
                ) -> tuple[int, list[int], list[Property], list[Property]]:
         """One scan of axis ``ai``'s block: its axis part ``aid`` and tag parts ``tags``
-        (changed in place), in scan mode ``mode``, with local input (``kind``, tag ``k``, ``arg``)."""
+        (changed in place), in scan mode ``mode``, with local input (``kind``, tag ``k``, ``arg``).
+
+        ``active`` lists the tags that are not inert (None: every tag) and ``watch`` the
+        inert ones whose properties are evaluated; the others are left as they are
+        (:meth:`context`).  A prescan pass always runs every tag."""
         core, q, h = self._split[aid]
         tis = self.tis[ai]
+        if active is None or mode == PRESCAN:
+            order: tuple[int, ...] = tuple(range(len(tis)))
+            watch = ()
+        elif kind == RAISE or kind == DROP:
+            order = active if k in active else tuple(sorted((*active, k)))
+            if k in watch:
+                watch = tuple(x for x in watch if x != k)
+        else:
+            order = active
         if kind == RAISE:
             ti = tis[k]
             tid = tags[k]
@@ -452,7 +509,8 @@ class CompiledModel:
         pending = self._pending
         rows = self._rows
         # 2. program, in program order
-        for j, ti in enumerate(tis):
+        for j in order:
+            ti = tis[j]
             tid = tags[j]
             cond = 2 if mode == PRESCAN else (1 if rung[tid] else 0)
             rr = rows[ti].get(tid * 3 + cond)
@@ -474,9 +532,10 @@ class CompiledModel:
             t = self._tick[ai].get(core)
             core = t if t is not None else self.piece_tick(ai, core)
             finish = self._finish
-            for j, ti in enumerate(tis):
+            for j in order:
                 tid = tags[j]
                 if pending[tid] and j not in q:
+                    ti = tis[j]
                     f = finish[ti].get((tid, core))
                     tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
             for j in q:
@@ -491,9 +550,10 @@ class CompiledModel:
             for ev in events:
                 e = self._event[ai].get((core, ev))
                 core = e if e is not None else self.piece_event(ai, core, ev)
-            for j, ti in enumerate(tis):
+            for j in order:
                 tid = tags[j]
                 if pending[tid]:
+                    ti = tis[j]
                     f = finish[ti].get((tid, core))
                     tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
         # 4. properties, then abstractions
@@ -501,17 +561,19 @@ class CompiledModel:
         good: list[Property] = []
         reads = self._reads_axis
         posts = self._tag_post
-        for j, ti in enumerate(tis):
-            tid = tags[j]
-            key = (tid, j in q, core if reads[ti] else -1)
-            p = posts[ti].get(key)
-            if p is None:
-                p = self.piece_tag_post(ti, ai, tid, key[1], key[2])
-            tags[j] = p[0]
-            if p[1]:
-                bad.extend(p[1])
-            if p[2]:
-                good.extend(p[2])
+        for seq in (order, watch):
+            for j in seq:
+                ti = tis[j]
+                tid = tags[j]
+                key = (tid, j in q, core if reads[ti] else -1)
+                p = posts[ti].get(key)
+                if p is None:
+                    p = self.piece_tag_post(ti, ai, tid, key[1], key[2])
+                tags[j] = p[0]
+                if p[1]:
+                    bad.extend(p[1])
+                if p[2]:
+                    good.extend(p[2])
         ap = self._axis_post[ai].get(core)
         if ap is None:
             ap = self.piece_axis_post(ai, core)
@@ -586,15 +648,16 @@ class CompiledModel:
         out = []
         naxes = self.naxes
         if naxes == 1:
+            active, watch = self.context(0, state)
+            aid = state[1]
+            tags = state[2:]
+            block = self._block
             for c, _ai, kind, k, arg in self.enabled(state):
                 if kind == PRESCAN_PASS:
-                    blk, bad, good = self._step_block(state, 0, PRESCAN, NOTHING, 0, None)
+                    aid2, tags2, bad, good = block(0, aid, list(tags), PRESCAN, NOTHING, 0, None)
                 else:
-                    blk, bad, good = self._step_block(state, 0, mode, kind, k, arg)
-                succ = (nphase, *blk)
-                if self.symmetric_groups:
-                    succ = self.canonical(list(succ))
-                out.append((c, succ, bad, good))
+                    aid2, tags2, bad, good = block(0, aid, list(tags), mode, kind, k, arg, active, watch)
+                out.append((c, (nphase, aid2, *tags2), bad, good))
             return out
         base: list[tuple[tuple[int, ...], list[Property], list[Property]]] = [
             self._step_block(state, ai, mode, NOTHING, 0, None) for ai in range(naxes)]

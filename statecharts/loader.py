@@ -42,6 +42,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 
 from statecharts import ir
+from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression
 
@@ -745,7 +746,12 @@ class _Builder:
             return chart
         self._reachability(f, chart, state_nodes)
         self._overlaps(f, chart)
+        self._eventless_cycles(f, chart)
         return chart
+
+    def _eventless_cycles(self, f: _File, chart: ir.Chart) -> None:
+        for cycle in eventless_cycles(chart, SYSTEM_PARAMETERS):
+            self.error(f, _loc_parts(cycle.transitions[0].location), cycle.describe())
 
     def _reachability(self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]]) -> None:
         reached: set[str] = set()

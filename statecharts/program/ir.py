@@ -221,9 +221,9 @@ class Tag:
     name: str
     data_type: str  # one of ATOMIC_TYPES, STRUCTURE_TYPES, AXIS_TYPES or AXIS_UNTYPED
     dimensions: tuple[int, ...] = ()  # () for a scalar; up to three dimensions
-    #: initial values as (member path, value), e.g. ("[2]", 5) or ("PRE", 1000); unlisted ones are 0
+    #: initial values other than 0 as (member path, value), e.g. ("[2]", 5) or ("PRE", 1000)
     initial: tuple[tuple[str, Scalar], ...] = ()
-    scope: str = ""  # "" controller scope, else the program's name
+    scope: str = field(default="", compare=False)  # "" controller scope, else the program's name
     inferred: bool = field(default=False, compare=False)
     description: str = field(default="", compare=False)
     location: SourceLocation = field(default=NOWHERE, compare=False)

@@ -301,7 +301,7 @@ def infer_tags(file: str, routines: tuple[Routine, ...], errors: list[Diagnostic
             if any(min(s[d] for s in use.subscripts) < 0 for d in range(rank)):
                 errors.append(_diag(ins, rung, f"array {name!r} has a negative subscript"))
                 continue
-        tags.append(Tag(name, data_type, dims, tuple(dict(use.shown).items()), inferred=True,
+        tags.append(Tag(name, data_type, dims, tuple((k, v) for k, v in dict(use.shown).items() if v), inferred=True,
                         location=use.first[0].location))
         listing.append(f"{name} ({data_type}{''.join(f'[{d}]' for d in dims)})")
     warnings = (f"tags inferred from their use: {', '.join(sorted(listing, key=str.lower))}",) if listing else ()
@@ -320,6 +320,31 @@ def check_declared(program: Program, errors: list[Diagnostic], spec: spec_ir.Spe
                             errors.append(_diag(ins, rung.number, (
                                 f"undefined tag {ref.base!r}: it is declared neither in the controller's tags nor in "
                                 f"program {program.name!r}")))
+
+
+def probe_compile(program: Program, spec: spec_ir.Spec) -> None:
+    """Compile the program against default axes of its declared types (ProgramError on a problem).
+
+    A rung file declares no axis types; its axis members are checked when a scenario binds it."""
+    from statecharts.engine import AxisInstance
+    from statecharts.program.ladder import Ladder
+    from statecharts.scan import System
+
+    if any(t.data_type == AXIS_UNTYPED for t in program.axes()):
+        ladder = Ladder(program)
+        if ladder.binding_problems:
+            raise ProgramError(list(ladder.binding_problems))
+        return
+    axes = []
+    for t in program.axes():
+        try:
+            chart = spec.chart_for_axis_type(t.data_type)
+        except KeyError:
+            raise ProgramError([Diagnostic(t.location.file, t.location.line, t.location.column, "", (
+                f"axis {t.name} has type {t.data_type}, which no chart of the specification models"))]) from None
+        variables = {"AxisType": t.data_type} if "AxisType" in {v.name for v in chart.variables} else {}
+        axes.append(AxisInstance(chart, t.name, variables=variables))
+    System(spec, axes, [], ladder=Ladder(program))
 
 
 def summary(program: Program) -> dict[str, object]:

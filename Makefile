@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate bench install deps-system lint clean
+.PHONY: check test deep generate bench install deps-system lint lint-run clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -53,8 +53,15 @@ deep: install
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3
 
+# ruff (rules in pyproject.toml) and mypy --strict on statecharts/ and checker/; fails on
+# any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
+# sources with planted defects).
 lint: install
-	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true
+	@$(MAKE) --no-print-directory lint-run
+
+lint-run:
+	@$(BIN)/python -m ruff check --no-cache .
+	@$(BIN)/python -m mypy
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis build *.egg-info
+	rm -rf $(VENV) .pytest_cache .hypothesis .mypy_cache .ruff_cache build *.egg-info

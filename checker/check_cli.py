@@ -13,7 +13,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import TextIO
+from typing import Any, NoReturn, TextIO
 
 from statecharts.diagnostics import InputError
 
@@ -41,8 +41,8 @@ def _positive_float(text: str) -> float:
     return value
 
 
-def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
-    p = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentParser:
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "check", help="model-check a system: properties, counterexamples, coverage",
         description="Explore every reachable state of a system (spec/systems/*.yaml) and check the "
                     "properties (spec/properties/*.yaml). Exit 0: all hold; 1: a violation; 3: incomplete.")
@@ -140,7 +140,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
 def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry (``python -m checker.check_cli``), for use before the main CLI wires ``check``."""
     class _P(argparse.ArgumentParser):
-        def error(self, message: str) -> None:  # type: ignore[override]
+        def error(self, message: str) -> NoReturn:
             self.print_usage(sys.stderr)
             print(f"{self.prog}: error: {message}", file=sys.stderr)
             raise SystemExit(EXIT_USAGE)

@@ -18,7 +18,7 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn, TextIO
 
 from checker import check_cli, render_cli
 from statecharts.diagnostics import Diagnostic, InputError
@@ -31,7 +31,7 @@ EXIT_USAGE = 2
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
         print(f"{self.prog}: error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_USAGE)
@@ -83,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "simulate":
             return _simulate(args, sys.stdout)
         for extension in (check_cli, render_cli):
-            code = extension.dispatch(args)
+            code: int | None = extension.dispatch(args)
             if code is not None:
                 return code
     except InputError as exc:
@@ -111,7 +111,7 @@ def _tolerant_streams() -> None:
 
 def _missing(paths: Sequence[str]) -> list[str]:
     # an empty argument would name the current directory and load everything under it
-    return [repr(p) if not p else p for p in paths if not p or not Path(p).exists()]
+    return [p if p else repr(p) for p in paths if not p or not Path(p).exists()]
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:

@@ -95,10 +95,10 @@ class SearchResult:
     peak_rss_kb: int
     codec: Codec
     encoded: list[bytes]
-    parent: array
-    via: array
-    depth_of: array
-    edges: array | None
+    parent: array[int]
+    via: array[int]
+    depth_of: array[int]
+    edges: array[int] | None
     initial_assignment: dict[int, int]
 
     @property
@@ -181,7 +181,8 @@ class Codec:
         return tuple([values[c] for (_t, values), c in zip(self.slots, codes)])
 
 
-def _progress_wanted() -> bool:
+def progress_wanted() -> bool:
+    """Whether long work shows a progress bar: on a terminal, and not under CI."""
     return sys.stderr.isatty() and os.environ.get("CI", "").lower() not in ("true", "1")
 
 
@@ -224,9 +225,9 @@ def explore(
             if part in seen_axis_parts:
                 continue
             seen_axis_parts.add(part)
-            cid = axis.chart.id  # type: ignore[attr-defined]
-            cov.configs.add((cid, part[0]))  # type: ignore[index]
-            for v, x in zip(axis.c.variables, part[1]):  # type: ignore[attr-defined, index]
+            cid = axis.chart.id
+            cov.configs.add((cid, part[0]))
+            for v, x in zip(axis.c.variables, part[1]):
                 cov.values.add((cid, v, x))
 
     for ai_index, assignment in enumerate(model.assignments):
@@ -247,7 +248,7 @@ def explore(
         for p in good:
             reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     bar = None
     task = None
     if show:

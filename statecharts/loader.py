@@ -25,6 +25,7 @@ unknown charts...).
 
 from __future__ import annotations
 
+import copy
 import itertools
 import json
 import math
@@ -38,8 +39,11 @@ from typing import Any
 
 import jsonschema
 from ruamel.yaml import YAML
+from ruamel.yaml.anchor import Anchor
+from ruamel.yaml.comments import CommentedMap, CommentedSeq, Format, LineCol
 from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
+from ruamel.yaml.tag import Tag
 
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
@@ -135,7 +139,7 @@ class _Node:
     (the schema would have let such a key through unchecked), so it fails loudly.
     """
 
-    __slots__ = ("kind", "keys", "raw")
+    __slots__ = ("keys", "kind", "raw")
 
     def __init__(self, raw: Any, kind: str) -> None:
         self.kind = kind
@@ -196,15 +200,15 @@ def spec_files(paths: Sequence[Path | str] | None = None) -> list[Path]:
 # --------------------------------------------------------------------------- YAML
 
 
-def _plain(node: Any) -> Any:
+def plain_data(node: Any) -> Any:
     """ruamel round-trip tree -> plain dicts/lists (for the JSON Schema validator).
 
     Only called on trees that passed :func:`tree_diagnostics` (bounded depth and size).
     """
     if isinstance(node, dict):
-        return {str(k): _plain(v) for k, v in node.items()}
+        return {str(k): plain_data(v) for k, v in node.items()}
     if isinstance(node, list):
-        return [_plain(v) for v in node]
+        return [plain_data(v) for v in node]
     if isinstance(node, str):
         return str(node)
     if isinstance(node, bool):
@@ -280,6 +284,9 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     if len(raw) > MAX_FILE_BYTES:
         errors.append(Diagnostic(name, 1, 1, "", f"{what} is larger than {MAX_FILE_BYTES} bytes"))
         return None
+    seen = _remembered_tree(name, raw)
+    if seen is not None:
+        return seen
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -307,14 +314,62 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
         line, col = _deep_event(text)
         errors.append(Diagnostic(name, line, col, "", f"nesting deeper than {MAX_YAML_DEPTH} levels"))
         return None
-    except Exception as exc:  # noqa: BLE001 - any parser failure on third-party text is a user error
+    except Exception as exc:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
         errors.append(Diagnostic(name, line, col, "", f"YAML error: {exc}".splitlines()[0]))
         return None
     problems, fatal = tree_diagnostics(name, tree, what=what)
     errors.extend(problems)
+    if not problems:
+        _remember_tree(name, raw, tree)
     return None if fatal else tree
+
+
+#: Trees of files read cleanly, by file name and content: the spec, the scenarios and the
+#: checker's files are read again and again in one process (tests, generation), and
+#: parsing with positions is the slow part of loading.  Callers get their own copy.
+_TREES: dict[tuple[str, bytes], Any] = {}
+_TREES_MAX_BYTES = 16_000_000
+_trees_bytes = 0
+
+
+def _remember_tree(name: str, raw: bytes, tree: Any) -> None:
+    global _trees_bytes
+    if _trees_bytes + len(raw) > _TREES_MAX_BYTES:
+        _TREES.clear()
+        _trees_bytes = 0
+    _TREES[(name, raw)] = _copy_tree(tree)
+    _trees_bytes += len(raw)
+
+
+def _remembered_tree(name: str, raw: bytes) -> Any | None:
+    tree = _TREES.get((name, raw))
+    return None if tree is None else _copy_tree(tree)
+
+
+def _copy_tree(node: Any) -> Any:
+    """A copy of a round-trip tree: new mappings and sequences with the same positions
+    (``lc``), tags and anchors; scalars are shared (immutable), comments are left out."""
+    if isinstance(node, CommentedMap):
+        m = CommentedMap()
+        for k, v in node.items():
+            m[k] = _copy_tree(v)
+        _share_attributes(node, m)
+        return m
+    if isinstance(node, CommentedSeq):
+        s = CommentedSeq(_copy_tree(v) for v in node)
+        _share_attributes(node, s)
+        return s
+    if isinstance(node, dict | list):
+        return copy.deepcopy(node)
+    return node
+
+
+def _share_attributes(old: Any, new: Any) -> None:
+    for attrib in (LineCol.attrib, Format.attrib, Anchor.attrib, Tag.attrib):
+        if hasattr(old, attrib):
+            setattr(new, attrib, getattr(old, attrib))
 
 
 _FLOW_TOKENS = re.compile(r"[\[\]{}#'\"\n]")
@@ -396,7 +451,7 @@ def _deep_event(text: str) -> tuple[int, int]:
                     return event.start_mark.line + 1, event.start_mark.column + 1
             elif isinstance(event, CollectionEndEvent):
                 depth -= 1
-    except Exception:  # noqa: BLE001 - only a position is wanted; line 1 will do
+    except Exception:
         pass
     return 1, 1
 
@@ -418,7 +473,11 @@ def _instance_text(value: Any) -> str:
 
 def _expected(err: jsonschema.ValidationError) -> str:
     """What the schema wanted, in words (``err.message`` can quote a whole subtree)."""
-    v, spec, inst = err.validator, err.validator_value, err.instance
+    # the schema keyword's argument: its type depends on the keyword checked below
+    v = err.validator
+    inst: Any = err.instance
+    spec: Any = err.validator_value
+    schema: Any = err.schema
     if v == "type":
         kinds = [spec] if isinstance(spec, str) else list(spec)
         return f"expected {' or '.join(_TYPE_NAMES.get(k, k) for k in kinds)}, got {_instance_text(inst)}"
@@ -439,7 +498,7 @@ def _expected(err: jsonschema.ValidationError) -> str:
     if v == "minLength":
         return "expected non-empty text"
     if v == "minProperties":
-        names = sorted(err.schema.get("properties", {}))
+        names = sorted(schema.get("properties", {}))
         if names:
             return f"expected at least {spec} key(s) out of: {', '.join(names)}"
         return f"expected at least {spec} key(s)"
@@ -469,7 +528,7 @@ def schema_diagnostics(
     """
     validator = jsonschema.Draft202012Validator(schema)
     out = []
-    for err in validator.iter_errors(_plain(tree)):
+    for err in validator.iter_errors(plain_data(tree)):
         parts = tuple(err.absolute_path)
         if err.validator == "additionalProperties" and isinstance(err.instance, dict):
             allowed = sorted(err.schema.get("properties", {}))
@@ -1008,7 +1067,7 @@ def _joint_witness(
         try:
             if (a is None or a(env)) and (b is None or b(env)):
                 return env, True
-        except Exception:  # noqa: BLE001 - a guard failing on some value cannot prove disjointness
+        except Exception:
             return None, False
     return None, True
 

@@ -22,7 +22,7 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics, tree_diagnostics
+from statecharts.loader import bundled_spec_dir, plain_data, read_yaml, schema_diagnostics, tree_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -165,7 +165,7 @@ def _read(path: Path, errors: list[Diagnostic]) -> Any:
         errors.extend(problems)
         return None if fatal else tree
     positioned = read_yaml(path, [], what="scenario")
-    if positioned is not None and _plain(positioned) == tree:
+    if positioned is not None and plain_data(positioned) == tree:
         return positioned
     return tree
 
@@ -191,11 +191,12 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
+        # an AoiScenario stands in for a Scenario (run_scenario hands it to the AOI runner)
         return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
-    doc = _plain(tree)
+    doc = plain_data(tree)
 
     def err(parts: tuple[Any, ...], message: str) -> None:
         line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
@@ -207,7 +208,7 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     charts: dict[str, ir.Chart] = {}
     untyped: set[str] = set()  # axes of an unknown type: their uses are not errors of their own
     for axis_name, a in setup["axes"].items():
-        p = ("setup", "axes", axis_name)
+        p: tuple[str | int, ...] = ("setup", "axes", axis_name)
         try:
             chart = spec.chart_for_axis_type(a["type"])
         except KeyError:
@@ -268,14 +269,15 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             operands[tag] = _operands(tag_ins[tag], ops, (*p, "operands", tag), err)
         events = []
         for j, e in enumerate(s.get("events", [])):
-            chart = charts.get(e["axis"])
-            if chart is None:
+            event_chart = charts.get(e["axis"])
+            if event_chart is None:
                 if e["axis"] not in untyped:
                     err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}; axes: {', '.join(setup['axes'])}")
                 continue
-            env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
+            env_events = [ev.name for ev in event_chart.events if ev.kind == "environment"]
             if e["event"] not in env_events:
-                err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
+                err((*p, "events", j, "event"),
+                    f"{e['event']!r} is not an environment event of {event_chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
@@ -360,7 +362,8 @@ def build_system(scenario: Scenario, spec: ir.Spec) -> System:
     return system
 
 
-def _same(expected: object, actual: object) -> bool:
+def same_value(expected: object, actual: object) -> bool:
+    """Whether an observed value meets an expected one (a bool only equals a bool; numbers compare as numbers)."""
     if isinstance(expected, bool) or isinstance(actual, bool):
         return expected is actual or (isinstance(expected, bool) and isinstance(actual, bool) and expected == actual)
     if isinstance(expected, (int, float)) and isinstance(actual, (int, float)):
@@ -401,7 +404,7 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
             before = record.observations
         for target, fld, expected in step.expect:
             actual = before[target][fld]
-            if not _same(expected, actual):
+            if not same_value(expected, actual):
                 mismatches.append(Mismatch(step.index, step.name, rows[-1].record.index, target, fld,
                                            expected, actual, step.line))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches))

@@ -18,7 +18,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import find, given, settings, strategies as st
+from hypothesis import find, given, settings
+from hypothesis import strategies as st
 
 try:
     import statecharts  # noqa: F401
@@ -87,7 +88,7 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
         variables["ServoFault"] = True
     system = _system(str(run["start"]), variables)
     system.tags["mrhd"].operands.update({"DiagnosticTest": run["test"]})
-    rungs = {t: False for t in TAGS}
+    rungs = dict.fromkeys(TAGS, False)
     seen = []
     for kind, name, value in run["steps"]:  # type: ignore[attr-defined]
         events: tuple[EnvironmentEvent, ...] = ()

@@ -7,7 +7,8 @@ from pathlib import Path
 ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
 EXPR = {"type": "string", "minLength": 1}
 ACTIONS = {"type": "array", "items": EXPR}
-SOURCE = {"type": "string", "minLength": 1, "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
+SOURCE = {"type": "string", "minLength": 1,
+          "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
 INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$", "description": "Id of an interpretation in interpretations.yaml."}
 CONF = {"enum": ["C", "C3", "I", "U"]}
 SCALAR = {"type": ["boolean", "integer", "number", "string"]}
@@ -355,7 +356,8 @@ SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
 # the add-on instruction's own languages (docs/aoi.md); defined beside their loader
-from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import AOI_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA  # noqa: E402
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})

@@ -47,8 +47,10 @@ generate: install
 bench: install
 	@$(BIN)/python benchmarks/bench.py
 
-# Longer property-based runs than CI affords.
+# What make test leaves out: every parametrisation of the long explorations (make test
+# runs a fast sample of them), longer property-based runs, the larger checks.
 deep: install
+	@$(BIN)/python -m pytest -m deep
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Iterator, Sequence
+from collections.abc import Container, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -46,6 +46,16 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
 
 def pytest_report_header(config: pytest.Config) -> str:
     return f"hypothesis profile: {settings.get_current_profile_name()}"
+
+
+def sampled(values: Iterable[Any], fast: Container[Any]) -> list[Any]:
+    """Parameters of a long exploration: those in ``fast`` run in ``make test`` (the fast
+    sample), the others only in ``make deep`` (marked ``deep``, deselected by default)."""
+    out = []
+    for v in values:
+        args = v if isinstance(v, tuple) else (v,)
+        out.append(pytest.param(*args, marks=() if v in fast else (pytest.mark.deep,)))
+    return out
 
 
 @pytest.fixture(scope="session")

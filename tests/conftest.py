@@ -36,6 +36,8 @@ from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
 from statecharts.scenario import Scenario, ScenarioResult, load_scenario, run_scenario, scenario_files
 
+pytest_plugins = ["pytester"]
+
 DEFAULT_PROFILE = "ci"
 _NOT_TIMED = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
 settings.register_profile("ci", max_examples=100, derandomize=True, print_blob=True, **_NOT_TIMED)

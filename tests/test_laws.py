@@ -73,7 +73,8 @@ from hypothesis.stateful import (
     rule,
     run_state_machine_as_test,
 )
-from strategies import (
+
+from motionchart.strategies import (
     AxisSetup,
     axis_setups,
     environment_event_names,
@@ -85,7 +86,6 @@ from strategies import (
     tag_name,
     value_operands,
 )
-
 from statecharts import ir
 from statecharts.loader import load_spec
 from statecharts.scan import EnvironmentEvent, ScanInputs, System, TagInstance

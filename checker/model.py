@@ -79,6 +79,7 @@ class StepFacts:
     fired: tuple[tuple[str, str], ...]  # (chart, transition id)
     executed: tuple[tuple[str, str], ...]  # (instruction, axis leaf state)
     errors: tuple[tuple[str, int, int], ...]  # (instruction, ERR, EXERR)
+    checks: tuple[tuple[str, str], ...] = ()  # (instruction, id of the check or abort that failed)
 
 
 class ModelError(ValueError):
@@ -524,12 +525,15 @@ class Model:
         fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)  # type: ignore[attr-defined]
         executed: list[tuple[str, str]] = []
         errors: list[tuple[str, int, int]] = []
+        checks: list[tuple[str, str]] = []
         for rec in self.trace:
             if type(rec) is Executed:
                 executed.append((self.system.tags[rec.tag].instruction.id, rec.axis_state))
             elif type(rec) is Errored:
-                errors.append((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
-        return StepFacts(fired, tuple(executed), tuple(errors))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                errors.append((mnemonic, rec.err, rec.exerr))
+                checks.append((mnemonic, rec.check))
+        return StepFacts(fired, tuple(executed), tuple(errors), tuple(checks))
 
     # -- properties ---------------------------------------------------------------------
 

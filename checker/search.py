@@ -77,6 +77,13 @@ class Coverage:
     executed: set[tuple[str, str]] = field(default_factory=set)
     errors: set[tuple[str, int, int]] = field(default_factory=set)
     values: set[tuple[str, str, object]] = field(default_factory=set)
+    #: (instruction, check id) of every check or abort that failed first in some step
+    checks: set[tuple[str, str]] = field(default_factory=set)
+    #: with ``explore(witnesses=True)``: every coverage item -> ``(state, choice)`` of the
+    #: first step (in BFS order, hence of least depth) that showed it; items are
+    #: ``("transition", chart, id)``, ``("cell", instruction, state)``,
+    #: ``("error", instruction, ERR, EXERR)`` and ``("check", instruction, check id)``
+    first: dict[tuple[object, ...], tuple[int, int]] = field(default_factory=dict)
 
 
 @dataclass
@@ -194,12 +201,14 @@ def explore(
     progress: bool | None = None,
     on_progress: Callable[[int, int, float], None] | None = None,
     stop_on_violation: bool = False,
+    witnesses: bool = False,
 ) -> SearchResult:
     """Explore every state of ``model`` reachable from its initial states, breadth first.
 
     With ``stop_on_violation`` the search ends (incomplete) after the expansion in which
     the first invariant or response violation was found; that violation is still one of
-    least depth."""
+    least depth.  With ``witnesses`` the coverage records, for every item, the first
+    step that covered it (:attr:`Coverage.first`), from which a shortest run is replayed."""
     start = time.perf_counter()
     codec = Codec(model)
     index: dict[bytes, int] = {}
@@ -307,6 +316,10 @@ def explore(
                     cov.executed.update(facts.executed)
                 if facts.errors:
                     cov.errors.update(facts.errors)
+                if facts.checks:
+                    cov.checks.update(facts.checks)
+                if witnesses and (facts.fired or facts.executed or facts.errors or facts.checks):
+                    _note_witnesses(cov.first, facts, i, ch.index)
                 if bad:
                     for p in bad:
                         if p.name not in violations:
@@ -341,6 +354,18 @@ def explore(
 
 class _Stop(Exception):
     pass
+
+
+def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
+    where = (state, choice)
+    for c, t in facts.fired:  # type: ignore[attr-defined]
+        first.setdefault(("transition", c, t), where)
+    for m, s in facts.executed:  # type: ignore[attr-defined]
+        first.setdefault(("cell", m, s), where)
+    for m, e, x in facts.errors:  # type: ignore[attr-defined]
+        first.setdefault(("error", m, e, x), where)
+    for m, c in facts.checks:  # type: ignore[attr-defined]
+        first.setdefault(("check", m, c), where)
 
 
 def is_property_decided(result: SearchResult, p: Property) -> bool:

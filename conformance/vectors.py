@@ -50,8 +50,11 @@ from statecharts.diagnostics import Diagnostic, ScenarioError
 
 VECTOR_FORMAT = "motionchart-vector/1"
 MANIFEST_FORMAT = "motionchart-vector-manifest/1"
-#: the bundled systems vectors are generated from (noncip_pairs adds nothing new and takes minutes)
-DEFAULT_SYSTEMS = ("noncip", "cip")
+#: the systems vectors are generated from: the bundled check systems (noncip_pairs adds no
+#: item and takes minutes) and two small systems of this package for the CIP instruction x
+#: state cells those leave out (self-test states; MRHD through initialisation and tests)
+SYSTEMS_DIR = Path(__file__).resolve().parent / "systems"
+DEFAULT_SYSTEMS = ("noncip", "cip", str(SYSTEMS_DIR / "cip_unassigned.yaml"), str(SYSTEMS_DIR / "cip_hookup.yaml"))
 AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
                 "which runs on a separate world of its own; vectors carry the main scenario format only")
@@ -349,7 +352,7 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
             spec, vid=vid, kind="generated", name=f"shortest run to {what}",
             description=(f"A shortest run ({len(inputs)} scans) found by breadth-first search of system "
                          f"{sysdef.name} (configuration {cfg}) that covers: {what}."),
-            sources=[sysdef.file and f"systems/{Path(sysdef.file).name}"], setup=setup, inputs=inputs, labels=labels,
+            sources=[f"systems/{Path(sysdef.file).name}"], setup=setup, inputs=inputs, labels=labels,
             origin=f"motionchart check --system {sysdef.name}", universe=suite.universe)
         missing = [t for k, t in found if t not in v["covers"][k]]
         if missing:

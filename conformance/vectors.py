@@ -199,14 +199,14 @@ def _inputs_key(v: Mapping[str, Any]) -> str:
 
 def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
                      progress: Callable[[str], None] | None = None) -> None:
-    from statecharts.loader import read_yaml
+    from statecharts.loader import read_document
     from statecharts.scenario import load_scenario, run_scenario, scenario_files
     files = scenario_files(paths)
     roots = [Path(p) for p in paths]
     for f in files:
         rel = _relative(f, roots)
         errors: list[Diagnostic] = []
-        tree = read_yaml(f, errors, what="scenario") if f.suffix != ".json" else json.loads(f.read_text("utf-8"))
+        tree = read_document(f, errors, what="scenario")
         if isinstance(tree, Mapping) and tree.get("format") == AOI_SCENARIO_FORMAT:
             suite.left_out.append({"file": rel, "reason": AOI_LEFT_OUT})
             continue

@@ -58,6 +58,8 @@ DEFAULT_SYSTEMS = ("noncip", "cip", str(SYSTEMS_DIR / "cip_unassigned.yaml"), st
 AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
                 "which runs on a separate world of its own; vectors carry the main scenario format only")
+LADDER_LEFT_OUT = ("runs a ladder program file (docs/programs.md); version 1 of the vector format carries "
+                   "programs of motion instruction calls only")
 #: charts that only the add-on instruction's world drives
 AOI_CHARTS = ("AxisVirtual", "DeviceHandler")
 
@@ -209,6 +211,10 @@ def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
         tree = read_document(f, errors, what="scenario")
         if isinstance(tree, Mapping) and tree.get("format") == AOI_SCENARIO_FORMAT:
             suite.left_out.append({"file": rel, "reason": AOI_LEFT_OUT})
+            continue
+        setup_node = tree.get("setup") if isinstance(tree, Mapping) else None
+        if isinstance(setup_node, Mapping) and isinstance(setup_node.get("program"), (str, Mapping)):
+            suite.left_out.append({"file": rel, "reason": LADDER_LEFT_OUT})
             continue
         scenario = load_scenario(f, spec)
         result = run_scenario(scenario, spec)

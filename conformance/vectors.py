@@ -293,6 +293,16 @@ def _item_text(item: tuple[object, ...]) -> tuple[str, str]:
     return "checks", f"{item[1]}.{item[2]}"
 
 
+def _witness_search(search: Any) -> Callable[..., Any]:
+    """The search that records the first step covering each item (``witnesses=True``)."""
+    import inspect
+    for name in ("explore", "explore_interpreted"):
+        fn = getattr(search, name, None)
+        if fn is not None and "witnesses" in inspect.signature(fn).parameters:
+            return fn  # type: ignore[no-any-return]
+    raise RuntimeError("no search of checker.search records coverage witnesses")
+
+
 def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
                       progress: Callable[[str], None] | None = None, *, explore_fn: Callable[..., Any] | None = None,
                       ) -> None:
@@ -300,14 +310,14 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
     from checker.counterexample import replay
     from checker.model import Model
     from checker.properties import load_properties
-    from checker.search import explore
+    from checker import search
     from checker.system import bundled_systems, load_system
     path = bundled_systems().get(str(system), Path(system))
     sysdef = load_system(path, spec)
     model = Model(spec, sysdef, load_properties(spec))
     if progress:
         progress(f"exploring system {sysdef.name}")
-    result = (explore_fn or explore)(model, progress=False, witnesses=True)
+    result = (explore_fn or _witness_search(search))(model, progress=False, witnesses=True)
     suite.systems.append({"name": sysdef.name, "states": result.states, "transitions": result.transitions,
                           "complete": result.complete})
     # order the witnesses by the kind of item, then by the universe's order of items

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from checker import check_cli, render_cli
+from conformance import cli as conformance_cli
 from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.loader import load_spec
@@ -65,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     check_cli.register(sub)
     render_cli.register(sub)
+    conformance_cli.register(sub)
     return parser
 
 
@@ -84,7 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _validate(args, sys.stdout)
         if args.command == "simulate":
             return _simulate(args, sys.stdout)
-        for extension in (check_cli, render_cli):
+        for extension in (check_cli, render_cli, conformance_cli):
             code = extension.dispatch(args)
             if code is not None:
                 return code

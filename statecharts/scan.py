@@ -354,25 +354,33 @@ class System:
             for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
                 self.queue.remove(name)
                 tag = self.tags[name]
-                if not tag.values.get("pending"):
-                    continue
-                failed = self._first_failure(tag, (ir.Stage.EXECUTE, ir.Stage.MESSAGE))
-                if failed is not None:
-                    self._fail(tag, failed)
-                    continue
-                request = tag.instruction.request
-                if request is not None:
-                    env = self._check_env(tag)
-                    for a in request.actions:
-                        axis.env[a.target.removeprefix("axis.")] = a.value(env)
-                    axis.send(request.event)
-                # the axis answers this request before it processes the next one
-                self._finish(tag)
+                if tag.values.get("pending"):
+                    self._deliver(axis, tag)
             for ev in events:
                 if ev.axis == axis.name:
-                    axis.apply_event_actions(ev.event)
-                    axis.send(ev.event)
+                    self._environment(axis, ev.event)
         self._finish_pending(None)
+
+    def _deliver(self, axis: AxisInstance, tag: TagInstance) -> None:
+        """The axis answers one queued, pending request (step a of the coarse update)."""
+        failed = self._first_failure(tag, (ir.Stage.EXECUTE, ir.Stage.MESSAGE))
+        if failed is not None:
+            self._fail(tag, failed)
+            return
+        request = tag.instruction.request
+        if request is not None:
+            env = self._check_env(tag)
+            for a in request.actions:
+                axis.env[a.target.removeprefix("axis.")] = a.value(env)
+            axis.send(request.event)
+        # the axis answers this request before it processes the next one
+        self._finish(tag)
+
+    @staticmethod
+    def _environment(axis: AxisInstance, event: str) -> None:
+        """One environment event reaches the axis (step b): its actions, then the event."""
+        axis.apply_event_actions(event)
+        axis.send(event)
 
     def _finish_pending(self, axis: str | None) -> None:
         """Finish every delivered, still pending instruction (of one axis, or of all)."""

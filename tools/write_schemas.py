@@ -375,6 +375,11 @@ from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
 
+# the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
+from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS  # noqa: E402
+
+SCHEMAS.update(CONFORMANCE_SCHEMAS)
+
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"
     for name, doc in SCHEMAS.items():

@@ -32,7 +32,7 @@ deps-system:
 
 check: install
 	@$(BIN)/motionchart validate
-	@$(BIN)/motionchart simulate --summary scenarios
+	@$(BIN)/motionchart simulate --summary scenarios examples/programs
 	@$(BIN)/motionchart check
 	@$(BIN)/motionchart check --system aoi
 
@@ -62,8 +62,10 @@ lint: install
 	@$(MAKE) --no-print-directory lint-run
 
 lint-run:
-	@$(BIN)/python -m ruff check --no-cache .
-	@$(BIN)/python -m mypy
+	@status=0; \
+	$(BIN)/python -m ruff check --no-cache . || status=1; \
+	$(BIN)/python -m mypy || status=1; \
+	exit $$status
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis .mypy_cache .ruff_cache build *.egg-info

@@ -22,7 +22,7 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import bundled_spec_dir, plain_data, read_yaml, schema_diagnostics, tree_diagnostics
+from statecharts.loader import bundled_spec_dir, plain_data, read_document, schema_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -82,7 +82,7 @@ class Mismatch:
 
     def __str__(self) -> str:
         label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
-        return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
+        return (f"line {self.line}: {label}, scan {self.scan}: {scan_label(self.target, self.field)} "
                 f"expected {_yaml_value(self.expected)}, got {_yaml_value(self.actual)}")
 
     def located(self, file: str) -> str:
@@ -95,6 +95,13 @@ def _yaml_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return repr(value)
+
+
+def scan_label(obj: str, field: str) -> str:
+    """How an observed value is named: ``mso1.DN``, ``Axis1.state``; program tags ``STATE``, ``Arr[2]``, ``T1.DN``."""
+    if not field:
+        return obj
+    return obj + field if field.startswith("[") else f"{obj}.{field}"
 
 
 def scan_cell(value: object) -> str:
@@ -135,39 +142,8 @@ def scenario_schema() -> dict[str, Any]:
 
 
 def _read(path: Path, errors: list[Diagnostic]) -> Any:
-    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML.
-
-    JSON is checked with the json module (its error positions are exact), then read
-    again with the YAML parser, which accepts JSON, to get line numbers for the later
-    diagnostics; should that fail, the JSON tree is used without positions.
-    """
-    if path.suffix != ".json":
-        return read_yaml(path, errors, what="scenario")
-    name = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"cannot read scenario: {exc.strerror or exc}"))
-        return None
-    except UnicodeDecodeError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"scenario is not UTF-8 text ({exc.reason} at byte {exc.start})"))
-        return None
-    try:
-        tree = json.loads(text)
-    except json.JSONDecodeError as exc:
-        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
-        return None
-    except RecursionError:
-        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
-        return None
-    problems, fatal = tree_diagnostics(name, tree, what="scenario")
-    if problems:
-        errors.extend(problems)
-        return None if fatal else tree
-    positioned = read_yaml(path, [], what="scenario")
-    if positioned is not None and plain_data(positioned) == tree:
-        return positioned
-    return tree
+    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML."""
+    return read_document(path, errors, what="scenario")
 
 
 def _coerce_operand(operand: ir.Operand, value: object) -> object:
@@ -228,13 +204,16 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             except KeyError:
                 err((*p, "variables", vname), f"chart {chart.id} has no variable {vname!r}; variables: {', '.join(v.name for v in chart.variables)}")
                 continue
-            problem = _value_problem(var.type, var.domain, value)
+            problem = value_problem(var.type, var.domain, value)
             if problem:
                 err((*p, "variables", vname), f"{vname}: {problem}")
         if "AxisType" in {v.name for v in chart.variables}:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
 
+    if isinstance(setup.get("program"), (str, Mapping)):
+        # a ladder program file: docs/programs.md
+        return _load_ladder_scenario(path, tree, doc, spec, err, errors, axes)
     program: list[ProgramEntry] = []
     tag_ins: dict[str, ir.Instruction] = {}
     for i, entry in enumerate(setup.get("program", [])):
@@ -279,8 +258,15 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
                 err((*p, "events", j, "event"),
                     f"{e['event']!r} is not an environment event of {event_chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
+        for key in ("tags", "always"):
+            if key in s:
+                err((*p, key), f"`{key}:` needs a ladder program (setup.program naming a program file)")
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
+            if not isinstance(fields, Mapping):
+                err((*p, "expect", target), (f"expected a mapping of observables for {target!r}; a tag path with a "
+                                             f"value needs a ladder program (setup.program naming a program file)"))
+                continue
             if target in tag_ins:
                 allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
             elif target in charts:
@@ -315,7 +301,27 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     )
 
 
-def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
+def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: ir.Spec, err: Any,
+                          errors: list[Diagnostic], axes: list[AxisSetup]) -> Scenario:
+    from statecharts.program.scenario import load_program_scenario
+
+    setup = doc["setup"]
+    for key in ("tags", "prescan"):
+        if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
+            err(("setup", key), f"setup.{key} needs a ladder program")
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
+                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    scan_ms = int(setup.get("scan_ms", 10))
+    cu_ms = int(setup.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("setup", "coarse_update_ms"), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    base = Scenario(file=str(path), name=doc["name"], description=str(doc.get("description", "")),
+                    sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])), scan_ms=scan_ms,
+                    coarse_update_ms=cu_ms, axes=tuple(axes), program=(), steps=steps)
+    return load_program_scenario(path, tree, doc, spec, err, errors, base)
+
+
+def value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
     """Why ``value`` cannot be given to a variable of ``vtype``, or None."""
     if vtype == "bool":
         return None if isinstance(value, bool) else f"expected true or false, got {value!r}"
@@ -375,6 +381,9 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
     """Run every step; an expression that cannot be evaluated on the scenario's values
     (e.g. a division by zero) is a ScenarioError naming the step."""
     from statecharts import aoi
+    from statecharts.program.scenario import ProgramScenario, run_program_scenario
+    if isinstance(scenario, ProgramScenario):
+        return run_program_scenario(scenario, spec)
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
         return result

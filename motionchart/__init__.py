@@ -23,9 +23,12 @@ from pathlib import Path
 from typing import Literal
 
 from checker.report import PropertyVerdict, Report
+from conformance.runner import RunResult
+from conformance.vectors import load_vectors
 from statecharts.diagnostics import Diagnostic, InputError, ScenarioError, SpecError
 from statecharts.ir import Chart, Instruction, Spec
 from statecharts.loader import load_spec as _load_spec
+from statecharts.program import Controller, Program, ProgramError
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 from statecharts.scenario import Mismatch, ScanRow, Scenario, ScenarioResult, scan_cell, scenario_files
 from statecharts.scenario import load_scenario as _load_scenario
@@ -34,13 +37,17 @@ from statecharts.scenario import run_scenario as _run_scenario
 __all__ = [
     "Chart",
     "CheckReport",
+    "Controller",
     "Diagnostic",
     "EnvironmentEvent",
     "ErrorCodeRow",
     "InputError",
     "Instruction",
     "Mismatch",
+    "Program",
+    "ProgramError",
     "PropertyVerdict",
+    "RunResult",
     "ScanInputs",
     "ScanRecord",
     "ScanRow",
@@ -53,14 +60,18 @@ __all__ = [
     "bundled_spec",
     "check",
     "error_codes",
+    "load_program",
     "load_scenario",
     "load_spec",
+    "load_vectors",
     "render_chart",
     "render_flowchart",
     "run_scenario",
     "run_scenarios",
+    "run_vectors",
     "scan_table",
     "scenario_files",
+    "write_vectors",
 ]
 
 #: Formats :func:`render_chart` and :func:`render_flowchart` produce: text (``dot``,
@@ -344,3 +355,59 @@ def error_codes(instruction: str | None = None, spec: Spec | None = None) -> lis
         rows[(err, exerr)] = ErrorCodeRow(err, exerr, e.name if e else "", e.meaning if e else "",
                                           e.confidence.value if e else "", e.provenance.source if e else "", tuple(ids))
     return [rows[k] for k in sorted(rows)]
+
+
+# --------------------------------------------------------------------------- programs and vectors
+
+
+def load_program(path: Path | str, spec: Spec | None = None, *, routine: str | None = None,
+                 program: str | None = None) -> Program:
+    """Read a ladder program: a rung file (ASCII or neutral text) or an L5X export
+    (``program`` and ``routine`` choose in an L5X file).  Bind it to axes and scan it
+    with :class:`Controller` (docs/programs.md).  Raises :class:`ProgramError` with every
+    problem of the file, each located."""
+    from statecharts.program import load_program as _load_program
+
+    return _load_program(path, spec=_spec(spec), routine=routine, program=program)
+
+
+def run_vectors(
+    vectors: Sequence[dict[str, object]] | Path | str,
+    adapter: str | None = None,
+    *,
+    spec: Spec | None = None,
+    jobs: int = 1,
+) -> RunResult:
+    """Run conformance vectors (loaded, or a directory written by ``motionchart
+    vectors``) against an implementation: ``adapter`` is the command that starts it
+    (speaking the JSON Lines protocol of docs/conformance.md), or ``None`` for the
+    reference adapter on ``spec`` in this process.  The result has one verdict per
+    vector, ``counts()``, ``ok`` and ``summary()``."""
+    from conformance.adapter import ReferenceAdapter
+    from conformance.runner import InProcessTransport, ProcessTransport, Transport, run
+
+    loaded = load_vectors(vectors) if isinstance(vectors, Path | str) else list(vectors)
+    s = _spec(spec)
+
+    def factory() -> Transport:
+        if adapter is None:
+            return InProcessTransport(ReferenceAdapter(s))
+        return ProcessTransport(adapter)
+
+    return run(loaded, factory, jobs=jobs)
+
+
+def write_vectors(
+    directory: Path | str,
+    scenarios: Sequence[Path | str] = ("scenarios",),
+    systems: Sequence[str | Path] = (),
+    *,
+    spec: Spec | None = None,
+) -> list[Path]:
+    """Write a conformance suite to ``directory`` (replaced as a whole): one vector per
+    scenario file under ``scenarios``, plus, for each system of ``systems`` (bundled
+    names or files), a shortest checker-generated run per transition, error code and
+    instruction x state cell (what ``motionchart vectors`` writes).  Returns the files."""
+    from conformance.vectors import build_suite, write_suite
+
+    return write_suite(build_suite(_spec(spec), scenarios=list(scenarios), systems=list(systems)), Path(directory))

@@ -420,6 +420,7 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
 
 
 def scenario_files(paths: Sequence[Path | str]) -> list[Path]:
+    """The scenario files of ``paths``: files as given, folders searched for ``*.yaml``, ``*.yml`` and ``*.json``."""
     out: list[Path] = []
     for p in map(Path, paths):
         if p.is_dir():

@@ -45,7 +45,9 @@ from statecharts import ir
 from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.inputs import MAX_INPUT_BYTES, read_input, shown_name
-from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression
+from statecharts.expr import (
+    KINDS, Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression, result_kinds,
+)
 
 SPEC_FORMAT = "motionchart-spec/1"
 MAX_FILE_BYTES = MAX_INPUT_BYTES
@@ -544,6 +546,80 @@ def schema_diagnostics(
     return out
 
 
+#: The Logix DINT range: ERR, EXERR, state values and integer tag values are DINTs.
+DINT_MIN, DINT_MAX = -(2**31), 2**31 - 1
+
+
+def number_diagnostics(name: str, tree: Any, *, what: str = "spec file") -> list[Diagnostic]:
+    """Numbers a spec file may not hold: integers outside the DINT range (ERR and EXERR,
+    state values, integer variables and operands are all DINTs in Logix), NaN and
+    infinities (a spec value is a finite number).  Iterative, over the whole tree."""
+    out: list[Diagnostic] = []
+    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
+    while stack:
+        node, parts = stack.pop()
+        if isinstance(node, dict):
+            stack.extend((v, (*parts, k)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
+        elif isinstance(node, bool):
+            continue
+        elif isinstance(node, int) and not DINT_MIN <= node <= DINT_MAX:
+            line, col = locate(tree, parts)
+            shown = str(node) if node.bit_length() <= 128 else f"an integer of {node.bit_length()} bits"
+            out.append(Diagnostic(name, line, col, node_path(parts), (
+                f"{shown} is outside the DINT range [{DINT_MIN}, {DINT_MAX}] of Logix integers")))
+        elif isinstance(node, float) and not math.isfinite(node):
+            line, col = locate(tree, parts)
+            out.append(Diagnostic(name, line, col, node_path(parts), f"{node} is not a finite number; a {what} holds finite values"))
+    return out
+
+
+def variable_kinds(v: ir.Variable) -> frozenset[str]:
+    """The kinds of value (:data:`statecharts.expr.KINDS`) a variable may hold."""
+    if v.type == "bool":
+        return frozenset({"bool"})
+    if v.type == "int":
+        return frozenset({"int"})
+    if v.type == "real":
+        return frozenset({"int", "real"})
+    found = set()
+    for value in v.domain or ():
+        found |= result_kinds(parse_expression(repr(value)), {})[0] if isinstance(value, (int, float, str)) else set()
+    return frozenset(found) or KINDS
+
+
+def assignment_problem(a: Assignment, var: ir.Variable, kinds: dict[str, frozenset[str]]) -> str | None:
+    """Why action ``a`` could give ``var`` a value of the wrong type or outside its domain, or None."""
+    got, constants = result_kinds(a.value, kinds)
+    wanted = variable_kinds(var)
+    if not got & wanted:
+        article = "an" if var.type[0] in "aeiou" else "a"
+        return (f"{a.text!r} assigns {' or '.join(sorted(_KIND_WORDS[k] for k in got))} to {var.name}, "
+                f"{article} {var.type} variable")
+    if var.domain is not None:
+        for c in constants:
+            if any(c == d and type(c) is type(d) for d in var.domain) or (
+                    var.type == "real" and isinstance(c, (int, float)) and not isinstance(c, bool) and c in var.domain):
+                continue
+            if var.type in ("int", "real") and var.domain and not isinstance(c, bool) and isinstance(c, (int, float)):
+                if c in var.domain:
+                    continue
+            return f"{a.text!r} can assign {c!r} to {var.name}, outside its domain {domain_text(var.domain)}"
+    return None
+
+
+def domain_text(domain: Sequence[object]) -> str:
+    """A domain as a reader wants it: ``[0, 2000]`` for a long run of integers, else the list."""
+    values = list(domain)
+    if len(values) > 8 and all(type(v) is int for v in values) and values == list(range(values[0], values[-1] + 1)):  # type: ignore[call-overload]
+        return f"(the range {values[0]} to {values[-1]})"
+    return repr(values)
+
+
+_KIND_WORDS = {"bool": "a bool", "int": "an integer", "real": "a real", "str": "a string", "none": "None"}
+
+
 # --------------------------------------------------------------------------- building
 
 
@@ -795,7 +871,32 @@ class _Builder:
         self._reachability(f, chart, state_nodes)
         self._overlaps(f, chart)
         self._eventless_cycles(f, chart)
+        self._assignment_kinds(f, chart, state_nodes, [(i, e.actions) for i, e in enumerate(events)])
         return chart
+
+    def _assignment_kinds(
+        self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]],
+        events: list[tuple[int, tuple[Assignment, ...]]],
+    ) -> None:
+        """Each action must be able to give its variable a value of its type and domain."""
+        variables = {v.name: v for v in chart.variables}
+        kinds = {n: variable_kinds(v) for n, v in variables.items()}
+        kinds.update({k: frozenset({"int"}) for k in SYSTEM_PARAMETERS})
+        sites: list[tuple[tuple[Any, ...], Assignment]] = []
+        for i, acts in events:
+            sites.extend(((("chart", "events", i, "actions", j), a) for j, a in enumerate(acts)))
+        for s in chart.states:
+            for key, acts in (("entry", s.entry), ("exit", s.exit)):
+                sites.extend((((*state_nodes[s.id], key, j), a) for j, a in enumerate(acts)))
+        for i, t in enumerate(chart.transitions):
+            sites.extend(((("chart", "transitions", i, "actions", j), a) for j, a in enumerate(t.actions)))
+        for parts, a in sites:
+            var = variables.get(a.target)
+            if var is None:
+                continue
+            problem = assignment_problem(a, var, kinds)
+            if problem:
+                self.error(f, parts, problem)
 
     def _eventless_cycles(self, f: _File, chart: ir.Chart) -> None:
         for cycle in eventless_cycles(chart, SYSTEM_PARAMETERS):
@@ -953,8 +1054,16 @@ class _Builder:
         member_nodes = node.items("members", "tag_member")
         self.duplicates(f, (*base, "members"), member_nodes, "name", "member")
         members = []
+        bits: dict[int, str] = {}
         for i, m in enumerate(member_nodes):
             bit = m.get("bit")
+            if bit is not None:
+                if not 0 <= int(bit) <= 31:
+                    self.error(f, (*base, "members", i, "bit"), f"bit {bit} of {m['name']} is outside a DINT (0 to 31)")
+                elif int(bit) in bits:
+                    self.error(f, (*base, "members", i, "bit"), f"bit {bit} of {m['name']} is already {bits[int(bit)]}")
+                else:
+                    bits[int(bit)] = str(m["name"])
             members.append(ir.TagMember(
                 name=m["name"], type=m["type"], bit=int(bit) if bit is not None else None,
                 description=str(m.get("description", "")), provenance=self.prov(f, (*base, "members", i), m),
@@ -1106,6 +1215,8 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
             continue
         b.errors.extend(schema_diagnostics(str(path), tree, schema, "a spec file"))
         if len(b.errors) == before:
+            b.errors.extend(number_diagnostics(str(path), tree))
+        if len(b.errors) == before:
             files.append(_File(str(path), tree))
         else:
             failed_files += 1
@@ -1120,6 +1231,8 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     errors: list[ir.ErrorCode] = []
     extended: list[ir.ExtendedError] = []
     tag_type: ir.TagType | None = None
+    codes_seen: dict[int, str] = {}
+    extended_seen: dict[tuple[str, int, int], str] = {}
     for f in files:
         t = f.top
         for i, n in enumerate(t.items("interpretations", "interpretation")):
@@ -1131,14 +1244,21 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 id=n["id"], title=n["title"], text=" ".join(str(n["text"]).split()),
                 confidence=ir.Confidence(n["confidence"]), evidence=tuple(n["evidence"]),
             ))
-        codes_seen: set[int] = set()
         for i, n in enumerate(t.items("errors", "error")):
             code = int(n["code"])
             if code in codes_seen:
-                b.error(f, ("errors", i, "code"), f"duplicate error code {code}")
-            codes_seen.add(code)
+                b.error(f, ("errors", i, "code"), f"duplicate error code {code} (first defined at {codes_seen[code]})")
+                continue
+            codes_seen[code] = str(b.loc(f, ("errors", i, "code"))).rsplit(":", 1)[0]
             errors.append(ir.ErrorCode(code, n["name"], n["meaning"], ir.Confidence(n["confidence"]), b.prov(f, ("errors", i), n)))
         for i, n in enumerate(t.items("extended_errors", "extended_error")):
+            triple = (str(n["instruction"]), int(n["err"]), int(n["exerr"]))
+            if triple in extended_seen:
+                b.error(f, ("extended_errors", i), (
+                    f"duplicate extended error {triple[1]}/{triple[2]} of {triple[0]} "
+                    f"(first defined at {extended_seen[triple]})"))
+                continue
+            extended_seen[triple] = str(b.loc(f, ("extended_errors", i))).rsplit(":", 1)[0]
             extended.append(ir.ExtendedError(
                 n["instruction"], int(n["err"]), int(n["exerr"]), n["name"], n["meaning"], ir.Confidence(n["confidence"]),
                 b.prov(f, ("extended_errors", i), n),

@@ -12,7 +12,9 @@ expectation failures, each naming the step, the object and the field.
 
 from __future__ import annotations
 
+import difflib
 import json
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -261,6 +263,10 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             for fname, value in fields.items():
                 if fname not in allowed:
                     err((*p, "expect", target, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
+                    continue
+                problem = _expectation_problem(spec, charts.get(target) if target not in tag_ins else None, fname, value)
+                if problem:
+                    err((*p, "expect", target, fname), f"{target}.{fname}: {problem}")
                 expect.append((target, fname, value))
         line, _ = locate(tree, p)
         steps.append(Step(
@@ -269,6 +275,8 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
                               prescan=bool(s.get("prescan", False))),
             expect=tuple(expect), line=line,
         ))
+    if not any(s.expect for s in steps) and steps:
+        err(("steps",), "no step has `expect:`; a scenario must check at least one observation")
     scan_ms = int(setup.get("scan_ms", 10))
     cu_ms = int(setup.get("coarse_update_ms", scan_ms))
     if cu_ms % scan_ms:
@@ -280,6 +288,54 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])),
         scan_ms=scan_ms, coarse_update_ms=cu_ms, axes=tuple(axes), program=tuple(program), steps=tuple(steps),
     )
+
+
+#: Value ranges of the Logix integer types of the MOTION_INSTRUCTION members.
+LOGIX_INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    "SINT": (-(2**7), 2**7 - 1), "INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1),
+    "LINT": (-(2**63), 2**63 - 1),
+}
+
+
+def _expectation_problem(spec: ir.Spec, chart: ir.Chart | None, field: str, value: object) -> str | None:
+    """Why ``value`` can never be observed in ``field`` (of a tag when ``chart`` is None)."""
+    if isinstance(value, float) and value != value:
+        return "NaN is never equal to anything; expect a number"
+    if chart is None:
+        if field == "FLAGS":
+            return _integer_problem("DINT", value)
+        member = next((m for m in spec.tag_type.members if m.name == field), None)
+        if member is None:
+            return None
+        if member.type.upper() == "BOOL":
+            return None if isinstance(value, bool) else f"expected true or false, got {_yaml_value(value)}"
+        return _integer_problem(member.type.upper(), value)
+    if field == "state":
+        ids = [st.id for st in chart.leaf_states()]
+        if value in ids:
+            return None
+        hint = difflib.get_close_matches(str(value), ids, n=1, cutoff=0.6)
+        did = f" (did you mean {hint[0]!r}?)" if hint else ""
+        return f"chart {chart.id} has no state {_yaml_value(value)}{did}; states: {', '.join(ids)}"
+    if field == chart.state_attribute:
+        values = sorted({st.value for st in chart.states if st.value is not None})
+        if isinstance(value, bool) or not isinstance(value, int):
+            return f"expected an integer state value, got {_yaml_value(value)}"
+        return None if value in values else f"{value} is not a state value of {chart.id}; values: {', '.join(map(str, values))}"
+    try:
+        var = chart.variable(field)
+    except KeyError:
+        return None
+    return _value_problem(var.type, var.domain, value)
+
+
+def _integer_problem(logix_type: str, value: object) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, int):
+        return f"expected an integer ({logix_type}), got {_yaml_value(value)}"
+    lo, hi = LOGIX_INTEGER_RANGES.get(logix_type, LOGIX_INTEGER_RANGES["DINT"])
+    if not lo <= value <= hi:
+        return f"{value if value.bit_length() <= 128 else 'the integer'} is outside the {logix_type} range [{lo}, {hi}]"
+    return None
 
 
 def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
@@ -307,6 +363,12 @@ def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any
         # any number is allowed (out-of-range values are how checks are exercised); text
         # only when it names a value ("enter as text" names were turned into numbers above)
         textual = isinstance(value, str) and operand.domain is not None and value in operand.domain
+        if isinstance(value, float) and not math.isfinite(value):
+            err((*parts, oname), f"operand {oname} of {ins.id}: {value} is not a finite number")
+            continue
+        if isinstance(value, int) and not isinstance(value, bool) and not -(2**63) <= value < 2**63:
+            err((*parts, oname), f"operand {oname} of {ins.id}: the integer is beyond 64 bits")
+            continue
         if not textual and (isinstance(value, bool) or not isinstance(value, (int, float))):
             names = [k for k, _ in operand.text_values]
             extra = f" or one of: {', '.join(names)}" if names else ""

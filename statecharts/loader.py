@@ -609,6 +609,38 @@ def assignment_problem(a: Assignment, var: ir.Variable, kinds: dict[str, frozens
     return None
 
 
+def _parameter_result_problem(
+    a: Assignment, var: ir.Variable, domains: dict[str, tuple[Any, ...] | None], written: set[str]
+) -> str | None:
+    """An action that reads a parameter (a variable no action writes) and not its own
+    target, over finite domains only, is evaluated on every combination: each result
+    must be in the target's domain (a 10**9 ms enable delay must not make a 10**8-step
+    timer)."""
+    if var.domain is None or a.target in a.value.names or not a.value.names - written:
+        return None
+    names = sorted(a.value.names)
+    size = 1
+    for n in names:
+        d = domains.get(n)
+        if d is None:
+            return None
+        size *= len(d)
+        if size > 4096:
+            return None
+    for values in itertools.product(*(domains[n] or () for n in names)):
+        env = dict(zip(names, values))
+        try:
+            result = a.value(env)
+        except Exception as exc:  # noqa: BLE001 - every failure of third-party text is reported
+            shown = ", ".join(f"{k}={v!r}" for k, v in env.items())
+            return f"{a.text!r} cannot be evaluated with {shown}: {exc}"
+        if result not in var.domain or isinstance(result, bool) != isinstance(var.initial, bool):
+            shown = ", ".join(f"{k}={v!r}" for k, v in env.items())
+            return (f"{a.text!r} gives {var.name} the value {result!r} with {shown}, "
+                    f"outside its domain {domain_text(var.domain)}")
+    return None
+
+
 def domain_text(domain: Sequence[object]) -> str:
     """A domain as a reader wants it: ``[0, 2000]`` for a long run of integers, else the list."""
     values = list(domain)
@@ -890,11 +922,14 @@ class _Builder:
                 sites.extend((((*state_nodes[s.id], key, j), a) for j, a in enumerate(acts)))
         for i, t in enumerate(chart.transitions):
             sites.extend(((("chart", "transitions", i, "actions", j), a) for j, a in enumerate(t.actions)))
+        written = {a.target for _, a in sites}
+        domains: dict[str, tuple[Any, ...] | None] = {v.name: v.domain for v in chart.variables}
+        domains.update(SYSTEM_PARAMETERS)
         for parts, a in sites:
             var = variables.get(a.target)
             if var is None:
                 continue
-            problem = assignment_problem(a, var, kinds)
+            problem = assignment_problem(a, var, kinds) or _parameter_result_problem(a, var, domains, written)
             if problem:
                 self.error(f, parts, problem)
 

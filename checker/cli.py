@@ -79,14 +79,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        if args.command == "validate":
-            return _validate(args, sys.stdout)
-        if args.command == "simulate":
-            return _simulate(args, sys.stdout)
-        for extension in (check_cli, render_cli):
-            code = extension.dispatch(args)
-            if code is not None:
-                return code
+        code = _run_command(args)
+        sys.stdout.flush()
+        return code
     except InputError as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
@@ -99,6 +94,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("motionchart: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        # output that cannot be written (a full disk, /dev/full, a path under a file)
+        target = f" {shown_name(exc.filename)}" if getattr(exc, "filename", None) else " the output"
+        print(f"motionchart {args.command}: cannot write{target}: {exc.strerror or exc}", file=sys.stderr)
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAIL
+
+
+def _run_command(args: argparse.Namespace) -> int:
+    if args.command == "validate":
+        return _validate(args, sys.stdout)
+    if args.command == "simulate":
+        return _simulate(args, sys.stdout)
+    for extension in (check_cli, render_cli):
+        code = extension.dispatch(args)
+        if code is not None:
+            return code
     return EXIT_USAGE
 
 

@@ -941,11 +941,27 @@ def _load_copy(t: ast.expr) -> ast.expr:
 
 def parse_expression(text: str) -> Expr:
     """Parse and check a guard/check expression; raise ExprError if not allowed."""
-    return _build_expression(text)[0]
+    if not isinstance(text, str):
+        return _build_expression(text)[0]
+    return _parse_expression_cached(text)
 
 
 def parse_assignment(text: str) -> Assignment:
     """Parse ``target = expr`` (or ``+=`` / ``-=``); raise ExprError if not allowed."""
+    if not isinstance(text, str):
+        return _build_assignment(text)[0]
+    return _parse_assignment_cached(text)
+
+
+# Expressions are immutable and their closures hold no state, so one parse per text serves
+# every load (an error is not cached: it is raised again from a fresh parse).
+@functools.lru_cache(maxsize=8192)
+def _parse_expression_cached(text: str) -> Expr:
+    return _build_expression(text)[0]
+
+
+@functools.lru_cache(maxsize=8192)
+def _parse_assignment_cached(text: str) -> Assignment:
     return _build_assignment(text)[0]
 
 

@@ -25,12 +25,13 @@ unknown charts...).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 import math
 import re
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -178,7 +179,9 @@ def bundled_spec_dir() -> Path:
     return Path(str(resources.files("motionchart_spec")))
 
 
+@functools.lru_cache(maxsize=1)
 def spec_schema() -> dict[str, Any]:
+    """The spec's JSON Schema (read once; treat it as read-only)."""
     text = (bundled_spec_dir() / "schema" / "spec.schema.json").read_text(encoding="utf-8")
     schema: dict[str, Any] = json.loads(text)
     return schema
@@ -511,6 +514,23 @@ def _node_at(tree: Any, parts: tuple[Any, ...]) -> Any:
     return node
 
 
+_VALIDATORS: dict[int, tuple[dict[str, Any], Any]] = {}
+#: (schema, document text) pairs already found valid: a valid document is valid again.
+_VALID_DOCUMENTS: set[tuple[int, str]] = set()
+
+
+def _validator(schema: dict[str, Any]) -> Any:
+    """A compiled validator per schema object (building one costs more than a small file)."""
+    hit = _VALIDATORS.get(id(schema))
+    if hit is not None and hit[0] is schema:
+        return hit[1]
+    if len(_VALIDATORS) > 16:
+        _VALIDATORS.clear()
+    validator = jsonschema.Draft202012Validator(schema)
+    _VALIDATORS[id(schema)] = (schema, validator)
+    return validator
+
+
 def schema_diagnostics(
     name: str, tree: Any, schema: dict[str, Any], what: str
 ) -> list[Diagnostic]:
@@ -518,9 +538,16 @@ def schema_diagnostics(
 
     An unknown key is reported at the key itself, with the keys that are allowed there.
     """
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = _validator(schema)
+    plain = _plain(tree)
+    try:
+        key: tuple[int, str] | None = (id(schema), json.dumps(plain, sort_keys=True, default=repr))
+    except (TypeError, ValueError, RecursionError):
+        key = None
+    if key is not None and key in _VALID_DOCUMENTS:
+        return []
     out = []
-    for err in validator.iter_errors(_plain(tree)):
+    for err in validator.iter_errors(plain):
         parts = tuple(err.absolute_path)
         if err.validator == "additionalProperties" and isinstance(err.instance, dict):
             allowed = sorted(err.schema.get("properties", {}))
@@ -543,6 +570,10 @@ def schema_diagnostics(
         else:
             message = _expected(err)
         out.append(Diagnostic(name, line, col, where, message))
+    if not out and key is not None:
+        if len(_VALID_DOCUMENTS) > 512:
+            _VALID_DOCUMENTS.clear()
+        _VALID_DOCUMENTS.add(key)
     return out
 
 
@@ -1228,19 +1259,50 @@ def _hint(name: str, known: Iterable[str]) -> str:
 
 def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     """Load, validate and build the specification; raise SpecError with every problem found."""
-    schema = spec_schema()
-    b = _Builder()
-    files: list[_File] = []
-    failed_files = 0
+    errors: list[Diagnostic] = []
+    documents: list[tuple[str, Any]] = []
     for path in spec_files(paths):
         # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files
         if path.suffix == ".json" or path.parent.name in ("schema", "systems", "properties"):
             continue
-        before = len(b.errors)
-        tree = read_yaml(path, b.errors)
+        before = len(errors)
+        tree = read_yaml(path, errors)
+        if tree is None and len(errors) == before:
+            errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+        documents.append((str(path), tree if len(errors) == before else _FAILED))
+    return _build_spec(documents, errors, str(paths[0]) if paths else "spec")
+
+
+def load_spec_documents(documents: Mapping[str, Any]) -> ir.Spec:
+    """Build the specification from parsed documents (file name -> YAML tree or plain
+    data), exactly as :func:`load_spec` builds it from files: the same shape, schema and
+    semantic checks, the same SpecError.  For tools that produce or transform spec data
+    in memory (and for the fuzzing tests, which mutate parsed trees)."""
+    errors: list[Diagnostic] = []
+    docs: list[tuple[str, Any]] = []
+    for name, tree in documents.items():
         if tree is None:
-            if len(b.errors) == before:
-                b.errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+            errors.append(Diagnostic(name, 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+            docs.append((name, _FAILED))
+            continue
+        problems, fatal = tree_diagnostics(name, tree)
+        errors.extend(problems)
+        docs.append((name, _FAILED if problems or fatal else tree))
+    return _build_spec(docs, errors, next(iter(documents), "spec"))
+
+
+_FAILED = object()  # a document that could not be read: its diagnostics are in the list already
+
+
+def _build_spec(documents: Sequence[tuple[str, Any]], read_errors: list[Diagnostic], label: str) -> ir.Spec:
+    schema = spec_schema()
+    b = _Builder()
+    b.errors.extend(read_errors)
+    files: list[_File] = []
+    failed_files = 0
+    for name, tree in documents:
+        before = len(b.errors)
+        if tree is _FAILED or tree is None:
             failed_files += 1
             continue
         if _other_format(tree):
@@ -1248,15 +1310,15 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
             # interpretation they cite still counts as used
             b.used_interpretations.update(_cited_interpretations(tree))
             continue
-        b.errors.extend(schema_diagnostics(str(path), tree, schema, "a spec file"))
+        b.errors.extend(schema_diagnostics(name, tree, schema, "a spec file"))
         if len(b.errors) == before:
-            b.errors.extend(number_diagnostics(str(path), tree))
+            b.errors.extend(number_diagnostics(name, tree))
         if len(b.errors) == before:
-            files.append(_File(str(path), tree))
+            files.append(_File(name, tree))
         else:
             failed_files += 1
     if not files and not b.errors:
-        b.errors.append(Diagnostic(str(paths[0]) if paths else "spec", 1, 1, "", "no spec files (*.yaml) found"))
+        b.errors.append(Diagnostic(label, 1, 1, "", "no spec files (*.yaml) found"))
     # When a file could not be read, what it defines is unknown: checks across files
     # would only repeat its failure (every use of its charts, codes, interpretations).
     complete = failed_files == 0

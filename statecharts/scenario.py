@@ -15,7 +15,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,7 +24,7 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import _plain, bundled_spec_dir, read_document, schema_diagnostics
+from statecharts.loader import _plain, bundled_spec_dir, read_document, schema_diagnostics, tree_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -123,6 +123,12 @@ class ScenarioResult:
     scenario: Scenario
     rows: tuple[ScanRow, ...]
     mismatches: tuple[Mismatch, ...]
+    #: scans run (``len(rows)`` unless the run was asked not to keep its rows)
+    scan_count: int | None = None
+
+    @property
+    def scans(self) -> int:
+        return len(self.rows) if self.scan_count is None else self.scan_count
 
     @property
     def passed(self) -> bool:
@@ -152,13 +158,29 @@ def _coerce_operand(operand: ir.Operand, value: object) -> object:
 def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     """Read and check a scenario against the spec; raise ScenarioError with every problem."""
     path = Path(path)
-    name = str(path)
     errors: list[Diagnostic] = []
     tree = _read(path, errors)
-    if tree is None:
+    if tree is None or errors:
         if not errors:
-            errors.append(Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
+            errors.append(Diagnostic(str(path), 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
         raise ScenarioError(errors)
+    return _scenario(path, tree, spec)
+
+
+def load_scenario_document(name: str, tree: Any, spec: ir.Spec) -> Scenario:
+    """Check a scenario given as parsed data (a YAML tree or plain dicts and lists), as
+    :func:`load_scenario` checks a file; ``name`` is the file named in diagnostics."""
+    if tree is None:
+        raise ScenarioError([Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`")])
+    problems, _fatal = tree_diagnostics(name, tree, what="scenario")
+    if problems:
+        raise ScenarioError(problems)
+    return _scenario(Path(name), tree, spec)
+
+
+def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
+    name = str(path)
+    errors: list[Diagnostic] = []
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
@@ -399,12 +421,22 @@ def _same(expected: object, actual: object) -> bool:
     return expected == actual
 
 
-def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
+def run_scenario(
+    scenario: Scenario, spec: ir.Spec, *, on_row: Callable[[ScanRow], object] | None = None, keep_rows: bool = True,
+) -> ScenarioResult:
     """Run every step; an expression that cannot be evaluated on the scenario's values
-    (e.g. a division by zero) is a ScenarioError naming the step."""
+    (e.g. a division by zero) is a ScenarioError naming the step.
+
+    ``on_row`` sees each scan's row as soon as it is run (a table can be printed while a
+    long scenario runs); with ``keep_rows=False`` the result holds no rows, only what the
+    verdict needs (the latest observations and the mismatches), so a run of a million
+    scans takes constant memory."""
     from statecharts import aoi
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
+        if on_row is not None:
+            for row in result.rows:
+                on_row(row)
         return result
     try:
         system = build_system(scenario, spec)
@@ -413,6 +445,7 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
+    count, last_index = 0, 0
     for step in scenario.steps:
         for k in range(step.scans):
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
@@ -428,14 +461,20 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
                 for fld, val in fields.items()
                 if before.get(obj, {}).get(fld) != val or (obj not in before)
             )
-            rows.append(ScanRow(step.index, step.name, record, changes))
+            row = ScanRow(step.index, step.name, record, changes)
+            count += 1
+            last_index = record.index
+            if keep_rows:
+                rows.append(row)
+            if on_row is not None:
+                on_row(row)
             before = record.observations
         for target, fld, expected in step.expect:
             actual = before[target][fld]
             if not _same(expected, actual):
-                mismatches.append(Mismatch(step.index, step.name, rows[-1].record.index, target, fld,
+                mismatches.append(Mismatch(step.index, step.name, last_index, target, fld,
                                            expected, actual, step.line))
-    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
+    return ScenarioResult(scenario, tuple(rows), tuple(mismatches), None if keep_rows else count)
 
 
 def scenario_files(paths: Sequence[Path | str]) -> list[Path]:

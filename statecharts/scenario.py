@@ -84,7 +84,7 @@ class Mismatch:
 
     def __str__(self) -> str:
         label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
-        return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
+        return (f"line {self.line}: {label}, scan {self.scan}: {scan_label(self.target, self.field)} "
                 f"expected {_yaml_value(self.expected)}, got {_yaml_value(self.actual)}")
 
     def located(self, file: str) -> str:
@@ -97,6 +97,13 @@ def _yaml_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return repr(value)
+
+
+def scan_label(obj: str, field: str) -> str:
+    """How an observed value is named: ``mso1.DN``, ``Axis1.state``; program tags ``STATE``, ``Arr[2]``, ``T1.DN``."""
+    if not field:
+        return obj
+    return obj + field if field.startswith("[") else f"{obj}.{field}"
 
 
 def scan_cell(value: object) -> str:
@@ -227,6 +234,9 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
 
+    if isinstance(setup.get("program"), (str, Mapping)):
+        # a ladder program file: docs/programs.md
+        return _load_ladder_scenario(path, tree, doc, spec, err, errors, axes)
     program: list[ProgramEntry] = []
     tag_ins: dict[str, ir.Instruction] = {}
     for i, entry in enumerate(setup.get("program", [])):
@@ -270,8 +280,15 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             if e["event"] not in env_events:
                 err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
+        for key in ("tags", "always"):
+            if key in s:
+                err((*p, key), f"`{key}:` needs a ladder program (setup.program naming a program file)")
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
+            if not isinstance(fields, Mapping):
+                err((*p, "expect", target), (f"expected a mapping of observables for {target!r}; a tag path with a "
+                                             f"value needs a ladder program (setup.program naming a program file)"))
+                continue
             if target in tag_ins:
                 allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
             elif target in charts:
@@ -360,6 +377,26 @@ def _integer_problem(logix_type: str, value: object) -> str | None:
     return None
 
 
+def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: ir.Spec, err: Any,
+                          errors: list[Diagnostic], axes: list[AxisSetup]) -> Scenario:
+    from statecharts.program.scenario import load_program_scenario
+
+    setup = doc["setup"]
+    for key in ("tags", "prescan"):
+        if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
+            err(("setup", key), f"setup.{key} needs a ladder program")
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
+                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    scan_ms = int(setup.get("scan_ms", 10))
+    cu_ms = int(setup.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("setup", "coarse_update_ms"), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    base = Scenario(file=str(path), name=doc["name"], description=str(doc.get("description", "")),
+                    sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])), scan_ms=scan_ms,
+                    coarse_update_ms=cu_ms, axes=tuple(axes), program=(), steps=steps)
+    return load_program_scenario(path, tree, doc, spec, err, errors, base)
+
+
 def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
     """Why ``value`` cannot be given to a variable of ``vtype``, or None."""
     if vtype == "bool":
@@ -432,6 +469,13 @@ def run_scenario(
     verdict needs (the latest observations and the mismatches), so a run of a million
     scans takes constant memory."""
     from statecharts import aoi
+    from statecharts.program.scenario import ProgramScenario, run_program_scenario
+    if isinstance(scenario, ProgramScenario):
+        program_result: ScenarioResult = run_program_scenario(scenario, spec)
+        if on_row is not None:
+            for row in program_result.rows:
+                on_row(row)
+        return program_result
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
         if on_row is not None:

@@ -32,7 +32,7 @@ deps-system:
 
 check: install
 	@$(BIN)/motionchart validate
-	@$(BIN)/motionchart simulate --summary scenarios
+	@$(BIN)/motionchart simulate --summary scenarios examples/programs
 	@$(BIN)/motionchart check
 	@$(BIN)/motionchart check --system aoi
 

@@ -31,7 +31,7 @@ from statecharts.diagnostics import Diagnostic, InputError, ScenarioError
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
 from statecharts.program.ir import AXIS_UNTYPED, Program
-from statecharts.program.ladder import Ladder, ProgramFault, label
+from statecharts.program.ladder import Ladder, ProgramFault
 from statecharts.program.reader import load_program
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
 from statecharts.scenario import (AxisSetup, Mismatch, Scenario, ScanRow, ScenarioResult, Step, _same,
@@ -236,5 +236,3 @@ def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec) -> Scena
                                            expected, actual, step.line))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
 
-
-_ = label

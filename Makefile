@@ -51,6 +51,7 @@ bench: install
 # runs a fast sample of them), longer property-based runs, the larger checks.
 deep: install
 	@$(BIN)/python -m pytest -m deep
+	@$(BIN)/python tests/fuzzing.py --specs 10000 --scenarios 10000 --systems 1000 --properties 1000
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3

@@ -56,7 +56,7 @@ deep: install
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3
 
-# ruff (rules in pyproject.toml) and mypy --strict on statecharts/ and checker/; fails on
+# ruff (rules in pyproject.toml) and mypy --strict (statecharts/, checker/, conformance/, motionchart/); fails on
 # any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
 # sources with planted defects).
 lint: install

@@ -29,8 +29,6 @@ past the precondition checks; every other value of the domain is still drawn.
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -40,7 +38,7 @@ from hypothesis import strategies as st
 from statecharts import ir
 from statecharts.engine import AxisInstance
 from statecharts.scan import EnvironmentEvent, ScanInputs
-from statecharts.scenario import Scenario, load_scenario
+from statecharts.scenario import Scenario, load_scenario_document
 
 __all__ = [
     "SCAN_TIMINGS",
@@ -307,14 +305,22 @@ def scenario_documents(
     axes: int = 1,
     max_steps: int = 6,
     max_scans: int = 3,
+    expect: Mapping[str, Mapping[str, object]] | None = None,
 ) -> st.SearchStrategy[dict[str, Any]]:
     """Scenario documents (``format: motionchart-scenario/1``, as a YAML or JSON file
     holds them) for ``chart``: ``axes`` axes (``Axis1``...) with drawn set-ups, one tag
     per instruction of ``instructions`` (mnemonics; default every instruction of the
     chart) on a drawn axis, and up to ``max_steps`` steps of rungs, operands, events and
-    scan counts.  No step expects anything."""
+    scan counts.
+
+    A scenario must check something: the last step expects ``expect`` (object -> field
+    -> value), by default only that every axis keeps the data type it was configured
+    with (configuration, which no instruction writes).  A property test states the
+    behaviour it checks on the run itself."""
     variants = [_variant(spec, chart, m) for m in instructions] if instructions else _by_mnemonic(spec, chart)
     names = [f"Axis{k + 1}" for k in range(axes)]
+    if expect is None and "AxisType" not in {v.name for v in chart.variables}:
+        raise ValueError(f"chart {chart.id} has no AxisType to expect by default; give `expect`")
 
     @st.composite
     def build(draw: st.DrawFn) -> dict[str, Any]:
@@ -346,6 +352,8 @@ def scenario_documents(
             if scans > 1:
                 step["scans"] = scans
             steps.append(step or {"scans": 1})
+        steps[-1]["expect"] = ({n: {"AxisType": setup_axes[n]["type"]} for n in names} if expect is None
+                               else {o: dict(f) for o, f in expect.items()})
         return {"format": "motionchart-scenario/1", "name": "drawn scenario",
                 "setup": {"scan_ms": scan_ms, "coarse_update_ms": coarse_ms, "axes": setup_axes, "program": program},
                 "steps": steps}
@@ -354,23 +362,18 @@ def scenario_documents(
 
 
 def _load_document(spec: ir.Spec, doc: Mapping[str, Any]) -> Scenario:
-    fd, name = tempfile.mkstemp(prefix="motionchart-", suffix=".json")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(doc, f)
-        return load_scenario(name, spec)
-    finally:
-        os.unlink(name)
+    return load_scenario_document("<drawn scenario>", json.loads(json.dumps(doc)), spec)
 
 
 def scenarios(
     spec: ir.Spec,
     chart: ir.Chart,
     instructions: Sequence[str] | None = None,
-    **options: int,
+    **options: Any,
 ) -> st.SearchStrategy[Scenario]:
     """Loaded scenarios (what :func:`statecharts.scenario.run_scenario` takes) drawn by
-    :func:`scenario_documents`; ``options`` are its ``axes``, ``max_steps``, ``max_scans``."""
+    :func:`scenario_documents`; ``options`` are its ``axes``, ``max_steps``, ``max_scans``
+    and ``expect``."""
     return scenario_documents(spec, chart, instructions, **options).map(lambda d: _load_document(spec, d))
 
 

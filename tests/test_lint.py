@@ -18,7 +18,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BIN = Path(sys.executable).parent
-LINTED = ("statecharts", "checker", "tests", "tools", "benchmarks", "spec")
+#: Top-level entries left out of the copy: not sources, or large.
+NOT_COPIED = {".git", ".venv", "generated", ".mypy_cache", ".ruff_cache", ".pytest_cache", ".hypothesis"}
 
 pytestmark = pytest.mark.skipif(
     shutil.which("make") is None or not (BIN / "mypy").exists() or not (BIN / "ruff").exists(),
@@ -30,12 +31,14 @@ pytestmark = pytest.mark.skipif(
 def pristine(tmp_path_factory: pytest.TempPathFactory) -> Path:
     root = tmp_path_factory.mktemp("lint") / "src"
     root.mkdir()
-    for name in ("pyproject.toml", "Makefile"):
-        shutil.copy2(ROOT / name, root / name)
-    ignore = shutil.ignore_patterns("__pycache__", ".mypy_cache", ".ruff_cache", "*.pyc", "snapshots")
-    for name in LINTED:
-        if (ROOT / name).is_dir():
-            shutil.copytree(ROOT / name, root / name, ignore=ignore)
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc", "*.svg", "*.png")
+    for entry in ROOT.iterdir():
+        if entry.name in NOT_COPIED or entry.name.endswith(".egg-info"):
+            continue
+        if entry.is_dir():
+            shutil.copytree(entry, root / entry.name, ignore=ignore)
+        elif entry.is_file():
+            shutil.copy2(entry, root / entry.name)
     return root
 
 

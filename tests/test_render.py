@@ -400,6 +400,7 @@ setup:
     - {tag: mso1, instruction: MSO, axis: Axis1}
 steps:
   - rungs: {mso1: true}
+    expect: {mso1: {ER: true, ERR: 12, EXERR: 12}}
 """
 
 

@@ -20,6 +20,7 @@ variable = {
         "domain": {"type": "array", "items": SCALAR, "minItems": 1},
         "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
         "initial": SCALAR, "description": {"type": "string"},
+        "writable": {"type": "boolean", "description": "A program may write this attribute (SSV): a scenario step may `set:` it."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -34,6 +35,8 @@ state = {
         "description": {"type": "string"},
         "entry": ACTIONS, "exit": ACTIONS,
         "states": {"type": "array", "items": {"$ref": "#/$defs/state"}},
+        "implies": {"type": "object", "additionalProperties": SCALAR,
+                    "description": "Values of chart variables that an axis set up in this state (or a descendant) has, e.g. a connected drive with its DC bus up."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }

@@ -78,12 +78,14 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
     from checker.report import build_report, text
     from checker.search import explore
     from checker.system import bundled_systems, load_system
+    from statecharts.inputs import path_argument_problem, shown_name
     from statecharts.loader import load_spec
 
     for opt in ("properties", "spec"):
         for p in getattr(args, opt) or []:
-            if not p or not Path(p).exists():
-                print(f"motionchart check: no such file or directory: {p!r}", file=sys.stderr)
+            problem = path_argument_problem(p)
+            if problem is not None:
+                print(f"motionchart check: {problem}: {shown_name(p)!r}", file=sys.stderr)
                 return EXIT_USAGE
     from checker.aoi_check import bundled_aoi_systems
     systems = {**bundled_systems(), **bundled_aoi_systems()}
@@ -93,7 +95,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         return EXIT_OK
     if args.system in systems:
         system_path = systems[args.system]
-    elif Path(args.system).is_file():
+    elif path_argument_problem(args.system) is None and Path(args.system).is_file():
         system_path = Path(args.system)
     else:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "

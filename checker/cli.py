@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from checker import check_cli, render_cli
+from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.loader import load_spec
 from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scenario_files
@@ -111,7 +112,14 @@ def _tolerant_streams() -> None:
 
 def _missing(paths: Sequence[str]) -> list[str]:
     # an empty argument would name the current directory and load everything under it
-    return [repr(p) if not p else p for p in paths if not p or not Path(p).exists()]
+    out = []
+    for p in paths:
+        problem = path_argument_problem(p)
+        if problem is None:
+            continue
+        name = repr(p) if not p else shown_name(p)
+        out.append(name if problem == "no such file or directory" else f"{name} ({problem})")
+    return out
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:

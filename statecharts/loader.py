@@ -42,11 +42,13 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 
 from statecharts import ir
+from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
+from statecharts.inputs import MAX_INPUT_BYTES, read_input, shown_name
 from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression
 
 SPEC_FORMAT = "motionchart-spec/1"
-MAX_FILE_BYTES = 2_000_000
+MAX_FILE_BYTES = MAX_INPUT_BYTES
 #: Deepest nesting of YAML mappings and sequences accepted (the spec needs about 12).
 MAX_YAML_DEPTH = 64
 #: Most YAML nodes a file may expand to, counting each use of an alias (``*name``).
@@ -271,15 +273,15 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     tree can be returned together with new diagnostics (e.g. a non-string key): the
     caller must not build from a file that added diagnostics.
     """
-    name = str(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"cannot read {what}: {exc.strerror or exc}"))
+    name = shown_name(path)
+    raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
+    if raw is None:
         return None
-    if len(raw) > MAX_FILE_BYTES:
-        errors.append(Diagnostic(name, 1, 1, "", f"{what} is larger than {MAX_FILE_BYTES} bytes"))
-        return None
+    return parse_yaml_bytes(name, raw, errors, what=what)
+
+
+def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
+    """:func:`read_yaml` on bytes already read (``name`` is the file shown in diagnostics)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -315,6 +317,53 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     problems, fatal = tree_diagnostics(name, tree, what=what)
     errors.extend(problems)
     return None if fatal else tree
+
+
+def read_document(path: Path, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
+    """Read one input document: JSON when the name ends in ``.json``, else YAML.
+
+    The one reader of user files: :func:`~statecharts.inputs.read_input` (regular files
+    only, bounded size), then the parser, then :func:`tree_diagnostics`.  A JSON
+    document is parsed with the json module (exact error positions) and, when it is
+    also valid YAML with the same content, returned as the YAML tree so that later
+    diagnostics carry line numbers.  Returns ``None`` when nothing can be checked further.
+    """
+    if Path(path).suffix != ".json":
+        return read_yaml(Path(path), errors, what=what)
+    name = shown_name(path)
+    raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
+    if raw is None:
+        return None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        errors.append(Diagnostic(name, 1, 1, "", f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start})"))
+        return None
+    try:
+        tree = json.loads(text, parse_constant=_json_constant)
+    except json.JSONDecodeError as exc:
+        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
+        return None
+    except ValueError as exc:  # NaN / Infinity, or an integer too long to convert
+        errors.append(Diagnostic(name, 1, 1, "", f"JSON error: {exc}"))
+        return None
+    except RecursionError:
+        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
+        return None
+    problems, fatal = tree_diagnostics(name, tree, what=what)
+    if problems:
+        errors.extend(problems)
+        return None if fatal else tree
+    positioned = parse_yaml_bytes(name, raw, [], what=what)
+    try:
+        same = positioned is not None and _plain(positioned) == tree
+    except RecursionError:
+        same = False
+    return positioned if same else tree
+
+
+def _json_constant(text: str) -> Any:
+    raise ValueError(f"{text} is not a number a motionchart file may hold")
 
 
 _FLOW_TOKENS = re.compile(r"[\[\]{}#'\"\n]")
@@ -769,7 +818,12 @@ class _Builder:
             return chart
         self._reachability(f, chart, state_nodes)
         self._overlaps(f, chart)
+        self._eventless_cycles(f, chart)
         return chart
+
+    def _eventless_cycles(self, f: _File, chart: ir.Chart) -> None:
+        for cycle in eventless_cycles(chart, SYSTEM_PARAMETERS):
+            self.error(f, _loc_parts(cycle.transitions[0].location), cycle.describe())
 
     def _reachability(self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]]) -> None:
         reached: set[str] = set()

@@ -22,7 +22,7 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics, tree_diagnostics
+from statecharts.loader import _plain, bundled_spec_dir, read_document, schema_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -135,39 +135,8 @@ def scenario_schema() -> dict[str, Any]:
 
 
 def _read(path: Path, errors: list[Diagnostic]) -> Any:
-    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML.
-
-    JSON is checked with the json module (its error positions are exact), then read
-    again with the YAML parser, which accepts JSON, to get line numbers for the later
-    diagnostics; should that fail, the JSON tree is used without positions.
-    """
-    if path.suffix != ".json":
-        return read_yaml(path, errors, what="scenario")
-    name = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"cannot read scenario: {exc.strerror or exc}"))
-        return None
-    except UnicodeDecodeError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"scenario is not UTF-8 text ({exc.reason} at byte {exc.start})"))
-        return None
-    try:
-        tree = json.loads(text)
-    except json.JSONDecodeError as exc:
-        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
-        return None
-    except RecursionError:
-        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
-        return None
-    problems, fatal = tree_diagnostics(name, tree, what="scenario")
-    if problems:
-        errors.extend(problems)
-        return None if fatal else tree
-    positioned = read_yaml(path, [], what="scenario")
-    if positioned is not None and _plain(positioned) == tree:
-        return positioned
-    return tree
+    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML."""
+    return read_document(path, errors, what="scenario")
 
 
 def _coerce_operand(operand: ir.Operand, value: object) -> object:

@@ -220,7 +220,17 @@ schema = {
     "$defs": {"state": state},
 }
 NAME_KEY = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
-OBS = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}
+EXPECTED = {"oneOf": [
+    {"type": ["boolean", "integer", "number", "string"]},
+    {"type": "object", "additionalProperties": False, "required": ["approx", "within"],
+     "description": "A number within a tolerance: a number at least 0, or a named tolerance such as dac_step.",
+     "properties": {"approx": {"type": "number"}, "within": {"type": ["number", "string"]}}},
+    {"type": "object", "additionalProperties": False, "required": ["not"],
+     "description": "Any value but this one.", "properties": {"not": {"type": ["boolean", "integer", "number", "string"]}}},
+    {"type": "array", "minItems": 1, "items": {"type": "string"},
+     "description": "passes_through: states the axis is in during the step, in this order."},
+]}
+OBS = {"type": "object", "additionalProperties": EXPECTED}
 scenario = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/scenario-1.json",
@@ -253,6 +263,8 @@ scenario = {
                     "properties": {
                         "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
                         "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                        "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
+                                   "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
                     }}},
             },
         },
@@ -262,6 +274,10 @@ scenario = {
                 "name": {"type": "string"},
                 "prescan": {"type": "boolean"},
                 "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
+                "within": {"type": "integer", "minimum": 1, "maximum": 100000,
+                           "description": "The step lasts until its expectations hold, at most this many scans."},
+                "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                        "description": "Attribute writes before the step's first scan, as SSV does: {axis: {attribute: value}}."},
                 "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
                 "operands": {"type": "object", "additionalProperties": {
                     "type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}},

@@ -21,10 +21,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from checker import check_cli, render_cli
+from conformance import cli as conformance_cli
 from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.loader import load_spec
-from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scenario_files
+from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scan_label, scenario_files
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -51,8 +52,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"motionchart {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    v = sub.add_parser("validate", help="check spec files (default: the bundled spec)")
-    v.add_argument("paths", nargs="*", metavar="PATH", help="spec files or directories")
+    v = sub.add_parser("validate", help="check spec files (default: the bundled spec), or ladder program files")
+    v.add_argument("paths", nargs="*", metavar="PATH",
+                   help="spec files or directories; or program files (.rll/.txt rung text, .L5X exports)")
     v.add_argument("--json", action="store_true", help="print one JSON object")
 
     s = sub.add_parser("simulate", help="run scenarios on the engine and check their expectations")
@@ -64,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     check_cli.register(sub)
     render_cli.register(sub)
+    conformance_cli.register(sub)
     return parser
 
 
@@ -83,7 +86,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _validate(args, sys.stdout)
         if args.command == "simulate":
             return _simulate(args, sys.stdout)
-        for extension in (check_cli, render_cli):
+        for extension in (check_cli, render_cli, conformance_cli):
             code = extension.dispatch(args)
             if code is not None:
                 return code
@@ -135,6 +138,8 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
     if missing:
         print(f"motionchart validate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
         return EXIT_USAGE
+    if args.paths and all(_is_program_file(p) for p in args.paths):
+        return _validate_programs(args, out)
     problems: list[Diagnostic] = []
     spec = None
     try:
@@ -187,6 +192,54 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
     return EXIT_OK
 
 
+def _is_program_file(path: str) -> bool:
+    from statecharts.program.reader import RUNG_SUFFIXES
+    return Path(path).is_file() and Path(path).suffix.lower() in (*RUNG_SUFFIXES, ".l5x")
+
+
+def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
+    """``validate PROGRAM...``: read each program and print what it holds (docs/programs.md)."""
+    from statecharts.program.reader import load_program, probe_compile, summary
+
+    spec = load_spec()
+    results: list[dict[str, object]] = []
+    problems: list[Diagnostic] = []
+    for path in args.paths:
+        try:
+            program = load_program(path, spec=spec)
+            probe_compile(program, spec)
+        except InputError as exc:
+            problems.extend(exc.diagnostics)
+            continue
+        results.append(summary(program))
+    if args.json:
+        json.dump({"valid": not problems, "programs": results, "errors": [str(d) for d in problems],
+                   "diagnostics": [d.as_dict() for d in problems]}, out, indent=2, sort_keys=True)
+        out.write("\n")
+    else:
+        for r in results:
+            routines = r["routines"]
+            assert isinstance(routines, dict)
+            out.write(f"program {r['program']} ({r['file']}, {r['form']}): {len(routines)} routine(s), "
+                      f"{r['rungs']} rungs, {r['tags']} tags\n")
+            out.write("  routines: " + ", ".join(f"{n} ({k} rungs{', main' if n == r['main_routine'] else ''})"
+                                                 for n, k in routines.items()) + "\n")
+            axes = r["axes"]
+            assert isinstance(axes, dict)
+            if axes:
+                out.write("  axes: " + ", ".join(f"{n} ({t})" for n, t in axes.items()) + "\n")
+            used = r["instructions"]
+            assert isinstance(used, dict)
+            out.write("  instructions: " + ", ".join(f"{m} x{k}" for m, k in used.items()) + "\n")
+            for w in r["warnings"]:  # type: ignore[attr-defined]
+                out.write(f"  note: {w}\n")
+    for d in problems:
+        print(d, file=sys.stderr)
+    if problems:
+        print(f"{len(problems)} error(s)", file=sys.stderr)
+    return EXIT_FAIL if problems else EXIT_OK
+
+
 def _aoi_line(docs: Sequence[Any]) -> str:
     """``add-on instructions: 1 (17 checks, 21 codes, 8 recovery states, 9 transitions), 5 sub-instructions``."""
     checks = sum(len(d.checks) for d in docs)
@@ -203,7 +256,7 @@ def _print_table(result: ScenarioResult, out: TextIO) -> None:
     out.write(f"{'scan':>5}  {'step':<28}  changes\n")
     for row in result.rows:
         label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
-        changes = "  ".join(f"{o}.{f}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
+        changes = "  ".join(f"{scan_label(o, f)}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
         cu = "" if row.record.coarse_update else " (no coarse update)"
         out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
 
@@ -218,7 +271,7 @@ def _result_json(result: ScenarioResult) -> dict[str, object]:
                 "scan": r.record.index,
                 "step": r.step + 1,
                 "coarse_update": r.record.coarse_update,
-                "changes": {f"{o}.{f}": a for o, f, _b, a in r.changes},
+                "changes": {scan_label(o, f): a for o, f, _b, a in r.changes},
             }
             for r in result.rows
         ],

@@ -88,7 +88,7 @@ class Mismatch:
 
     def __str__(self) -> str:
         label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
-        return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
+        return (f"line {self.line}: {label}, scan {self.scan}: {scan_label(self.target, self.field)} "
                 f"expected {_yaml_value(self.expected)}, got {_yaml_value(self.actual)}")
 
     def located(self, file: str) -> str:
@@ -99,6 +99,13 @@ class Mismatch:
 def _yaml_value(value: object) -> str:
     """Spell a value as it is written in a scenario (true/false, not True/False)."""
     return expectations.yaml_value(value)
+
+
+def scan_label(obj: str, field: str) -> str:
+    """How an observed value is named: ``mso1.DN``, ``Axis1.state``; program tags ``STATE``, ``Arr[2]``, ``T1.DN``."""
+    if not field:
+        return obj
+    return obj + field if field.startswith("[") else f"{obj}.{field}"
 
 
 def scan_cell(value: object) -> str:
@@ -211,6 +218,9 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
 
+    if isinstance(setup.get("program"), (str, Mapping)):
+        # a ladder program file: docs/programs.md
+        return _load_ladder_scenario(path, tree, doc, spec, err, errors, axes)
     program: list[ProgramEntry] = []
     tag_ins: dict[str, ir.Instruction] = {}
     for i, entry in enumerate(setup.get("program", [])):
@@ -256,8 +266,15 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             if e["event"] not in env_events:
                 err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
+        for key in ("tags", "always"):
+            if key in s:
+                err((*p, key), f"`{key}:` needs a ladder program (setup.program naming a program file)")
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
+            if not isinstance(fields, Mapping):
+                err((*p, "expect", target), (f"expected a mapping of observables for {target!r}; a tag path with a "
+                                             f"value needs a ladder program (setup.program naming a program file)"))
+                continue
             if target in tag_ins:
                 allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
             elif target in charts:
@@ -303,6 +320,26 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])),
         scan_ms=scan_ms, coarse_update_ms=cu_ms, axes=tuple(axes), program=tuple(program), steps=tuple(steps),
     )
+
+
+def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: ir.Spec, err: Any,
+                          errors: list[Diagnostic], axes: list[AxisSetup]) -> Scenario:
+    from statecharts.program.scenario import load_program_scenario
+
+    setup = doc["setup"]
+    for key in ("tags", "prescan"):
+        if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
+            err(("setup", key), f"setup.{key} needs a ladder program")
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
+                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    scan_ms = int(setup.get("scan_ms", 10))
+    cu_ms = int(setup.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("setup", "coarse_update_ms"), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    base = Scenario(file=str(path), name=doc["name"], description=str(doc.get("description", "")),
+                    sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])), scan_ms=scan_ms,
+                    coarse_update_ms=cu_ms, axes=tuple(axes), program=(), steps=steps)
+    return load_program_scenario(path, tree, doc, spec, err, errors, base)
 
 
 def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
@@ -365,6 +402,9 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
     """Run every step; an expression that cannot be evaluated on the scenario's values
     (e.g. a division by zero) is a ScenarioError naming the step."""
     from statecharts import aoi
+    from statecharts.program.scenario import ProgramScenario, run_program_scenario
+    if isinstance(scenario, ProgramScenario):
+        return run_program_scenario(scenario, spec)
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
         return result

@@ -231,6 +231,12 @@ EXPECTED = {"oneOf": [
      "description": "passes_through: states the axis is in during the step, in this order."},
 ]}
 OBS = {"type": "object", "additionalProperties": EXPECTED}
+#: a ladder program file (rung text or L5X), relative to the scenario
+PROGRAM_FILE = {"type": "string", "minLength": 1}
+#: program tag values by path (``START_PB``, ``Arr[2]``, ``T1.PRE``)
+TAG_VALUES = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number"]}}
+#: per object its observations; with a program also a tag path with its value (``NEXTSTATE: 1``)
+EXPECT = {"type": "object", "additionalProperties": {"oneOf": [OBS, {"type": ["boolean", "integer", "number", "string"]}]}}
 scenario = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/scenario-1.json",
@@ -257,15 +263,22 @@ scenario = {
                                  "state": {"type": "string"},
                                  "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                              }}},
-                "program": {"type": "array", "items": {
-                    "type": "object", "additionalProperties": False,
-                    "required": ["tag", "instruction", "axis"],
-                    "properties": {
-                        "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
-                        "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
-                        "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
-                                   "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
-                    }}},
+                "program": {"oneOf": [
+                    {"type": "array", "items": {
+                        "type": "object", "additionalProperties": False,
+                        "required": ["tag", "instruction", "axis"],
+                        "properties": {
+                            "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
+                            "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                            "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
+                                       "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
+                        }}},
+                    PROGRAM_FILE,
+                    {"type": "object", "additionalProperties": False, "required": ["file"],
+                     "properties": {"file": PROGRAM_FILE, "routine": NAME_KEY, "program": NAME_KEY}},
+                ]},
+                "tags": TAG_VALUES,
+                "prescan": {"type": "boolean"},
             },
         },
         "steps": {"type": "array", "minItems": 1, "items": {
@@ -284,7 +297,9 @@ scenario = {
                 "events": {"type": "array", "items": {
                     "type": "object", "additionalProperties": False, "required": ["axis", "event"],
                     "properties": {"axis": NAME_KEY, "event": NAME_KEY}}},
-                "expect": {"type": "object", "additionalProperties": OBS},
+                "expect": EXPECT,
+                "always": EXPECT,
+                "tags": TAG_VALUES,
             }}},
     },
 }
@@ -378,6 +393,11 @@ from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, 
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
+
+# the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
+from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS  # noqa: E402
+
+SCHEMAS.update(CONFORMANCE_SCHEMAS)
 
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"

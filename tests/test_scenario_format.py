@@ -130,7 +130,7 @@ def test_not_refuses_a_structured_value(tmp_path: Path) -> None:
           - expect:
               A: {AxisState: {not: 0, approx: 1}}
         """)
-    assert "steps[0].expect.A.AxisState" in text
+    assert "steps[0].expect.A" in text and "s.yaml:9:" in text  # located at the object holding it
 
 
 # ------------------------------------------------------------------------ within:
@@ -385,10 +385,13 @@ SCENARIO_SCHEMA = json.loads((bundled_spec_dir() / "schema" / "scenario.schema.j
 #: the keys each node of the scenario format has, as the loader reads them
 LOADER_KEYS = {
     "": {"format", "name", "description", "sources", "covers", "setup", "steps"},
-    "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "program"},
+    # tags and prescan: set-up of a ladder program (statecharts/program/scenario.py)
+    "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "program", "tags", "prescan"},
     "/properties/setup/properties/axes/additionalProperties": {"type", "state", "variables"},
-    "/properties/setup/properties/program/items": {"tag", "instruction", "axis", "operands", "preset"},
-    "/properties/steps/items": {"name", "prescan", "scans", "within", "rungs", "operands", "events", "expect", "set"},
+    "/properties/setup/properties/program/oneOf/0/items": {"tag", "instruction", "axis", "operands", "preset"},
+    # tags and always: steps of a scenario with a ladder program
+    "/properties/steps/items": {"name", "prescan", "scans", "within", "rungs", "operands", "events", "expect", "set",
+                                "tags", "always"},
     "/properties/steps/items/properties/events/items": {"axis", "event"},
 }
 
@@ -396,8 +399,7 @@ LOADER_KEYS = {
 def _node(pointer: str) -> dict[str, object]:
     node: object = SCENARIO_SCHEMA
     for part in filter(None, pointer.split("/")):
-        assert isinstance(node, dict)
-        node = node[part]
+        node = node[int(part)] if isinstance(node, list) else node[part]  # type: ignore[index]
     assert isinstance(node, dict)
     return node
 
@@ -410,7 +412,8 @@ def test_scenario_schema_and_loader_agree(pointer: str) -> None:
 
 
 def test_expectation_forms_in_the_schema_are_those_the_loader_parses() -> None:
-    forms = _node("/properties/steps/items/properties/expect")["additionalProperties"]["additionalProperties"]
+    per_object = _node("/properties/steps/items/properties/expect/additionalProperties/oneOf/0")
+    forms = per_object["additionalProperties"]
     assert isinstance(forms, dict)
     objects = [f for f in forms["oneOf"] if f.get("type") == "object"]
     assert {frozenset(f["properties"]) for f in objects} == {expectations.APPROX_KEYS, expectations.NOT_KEYS}

@@ -330,8 +330,12 @@ def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: i
     for key in ("tags", "prescan"):
         if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
             err(("setup", key), f"setup.{key} needs a ladder program")
-    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
-                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    charts = {a.name: spec.chart(a.chart) for a in axes}
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("within", s.get("scans", 1))),
+                       inputs=ScanInputs(), expect=(), line=locate(tree, ("steps", i))[0],
+                       sets=_sets(charts, set(), setup["axes"], s.get("set", {}), ("steps", i, "set"), err),
+                       within=int(s["within"]) if "within" in s else None)
+                  for i, s in enumerate(doc["steps"]))
     scan_ms = int(setup.get("scan_ms", 10))
     cu_ms = int(setup.get("coarse_update_ms", scan_ms))
     if cu_ms % scan_ms:

@@ -417,3 +417,30 @@ def test_expectation_forms_in_the_schema_are_those_the_loader_parses() -> None:
     assert isinstance(forms, dict)
     objects = [f for f in forms["oneOf"] if f.get("type") == "object"]
     assert {frozenset(f["properties"]) for f in objects} == {expectations.APPROX_KEYS, expectations.NOT_KEYS}
+
+
+# ------------------------------------------------------------------------ the same rules with a ladder program
+
+def test_the_rules_hold_in_a_scenario_with_a_ladder_program(tmp_path: Path) -> None:
+    program = Path(__file__).resolve().parents[1] / "examples" / "programs" / "fault_recovery.L5X"
+    body = f"""
+        setup:
+          program: {program}
+          axes:
+            X_axis: {{type: AXIS_CIP_DRIVE, state: Running}}
+            Y_axis: {{type: AXIS_CIP_DRIVE, state: Running}}
+            Z_axis: {{type: AXIS_CIP_DRIVE, state: Running}}
+          tags: {{STATE: 1, NEXTSTATE: 1}}
+        steps:
+          - tags: {{NEXTSTATE: 9}}
+            expect: {{STATE: 9}}
+          - name: MSF on every axis, then MAFR once each is stopped (001 Stopping, then Stopped)
+            within: 10
+            expect:
+              X_AXIS_STAT[1]: {{DN: true, ERR: {{not: 20}}}}
+              X_axis: {{passes_through: [Running, Stopping, Stopped]}}
+              Y_axis: {{CIPAxisState: {{approx: 2, within: 0}}}}
+        """
+    assert _run(tmp_path, body) == []
+    failures = _run(tmp_path, body.replace("within: 10", "within: 1"))
+    assert failures and "within" not in failures[0]  # the step ended after one scan, with its values

@@ -31,7 +31,7 @@ from statecharts.diagnostics import Diagnostic, InputError, ScenarioError
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
 from statecharts.program.ir import AXIS_UNTYPED, Program
-from statecharts.program.ladder import Ladder, ProgramFault, label
+from statecharts.program.ladder import Ladder, ProgramFault
 from statecharts.program.reader import load_program
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
 from statecharts import expectations
@@ -250,5 +250,3 @@ def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec) -> Scena
         mismatches.extend(_step_mismatches(step, before, visits, rows[-1].record.index))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
 
-
-_ = label

@@ -74,6 +74,8 @@ def test_controller_errors() -> None:
     c = Controller(SEQUENCE, axes={"Axis1": "AXIS_CIP_DRIVE"}, spec=SPEC)
     with pytest.raises(KeyError, match="set by its instruction"):
         c.write("MSO_1.DN", True)
+    with pytest.raises(KeyError, match="not an environment event of AxisCIP"):
+        c.scan(events=(("Axis1", "servo_fault"),))
     snap = c.snapshot()
     c.scan(START_PB=True)
     assert c.read("START_PB") is True

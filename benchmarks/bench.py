@@ -69,7 +69,7 @@ def reference_bfs(n: int) -> tuple[int, int]:
         succ = {s}  # a scan in which nothing changes
         for i, local in enumerate(s):
             for tgt in MOVES[local]:
-                succ.add(tuple(sorted(s[:i] + (tgt,) + s[i + 1:])))
+                succ.add(tuple(sorted((*s[:i], tgt, *s[i + 1:]))))
         transitions += len(succ)
         for t in succ:
             if t not in parent:
@@ -148,4 +148,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    code = main()
+    # the ladder interpreter's figures, a separate section (benchmarks/ladder_bench.py)
+    from benchmarks.ladder_bench import ladder_benchmark
+    ladder_benchmark()
+    raise SystemExit(code)

@@ -79,6 +79,13 @@ class Coverage:
     executed: set[tuple[str, str]] = field(default_factory=set)
     errors: set[tuple[str, int, int]] = field(default_factory=set)
     values: set[tuple[str, str, object]] = field(default_factory=set)
+    #: (instruction, check id) of every check or abort that failed first in some step
+    checks: set[tuple[str, str]] = field(default_factory=set)
+    #: with ``explore(witnesses=True)``: every coverage item -> ``(state, choice)`` of the
+    #: first step (in BFS order, hence of least depth) that showed it; items are
+    #: ``("transition", chart, id)``, ``("cell", instruction, state)``,
+    #: ``("error", instruction, ERR, EXERR)`` and ``("check", instruction, check id)``
+    first: dict[tuple[object, ...], tuple[int, int]] = field(default_factory=dict)
 
 
 @dataclass
@@ -97,10 +104,10 @@ class SearchResult:
     peak_rss_kb: int
     codec: Codec | CoreCodec
     encoded: list[bytes]
-    parent: array
-    via: array
-    depth_of: array
-    edges: array | None
+    parent: array[int]
+    via: array[int]
+    depth_of: array[int]
+    edges: array[int] | None
     initial_assignment: dict[int, int]
     #: bytes of the visited set's table (the compiled core's search; 0 otherwise)
     visited_bytes: int = 0
@@ -187,7 +194,8 @@ class Codec:
         return tuple([values[c] for (_t, values), c in zip(self.slots, codes)])
 
 
-def _progress_wanted() -> bool:
+def progress_wanted() -> bool:
+    """Whether long work shows a progress bar: on a terminal, and not under CI."""
     return sys.stderr.isatty() and os.environ.get("CI", "").lower() not in ("true", "1")
 
 
@@ -200,6 +208,7 @@ def explore_interpreted(
     progress: bool | None = None,
     on_progress: Callable[[int, int, float], None] | None = None,
     stop_on_violation: bool = False,
+    witnesses: bool = False,
 ) -> SearchResult:
     """The interpreter back-end of the search: every step loads a whole
     :class:`statecharts.scan.System`, scans it and extracts the successor.  Kept as the
@@ -207,7 +216,8 @@ def explore_interpreted(
 
     With ``stop_on_violation`` the search ends (incomplete) after the expansion in which
     the first invariant or response violation was found; that violation is still one of
-    least depth."""
+    least depth.  With ``witnesses`` the coverage records, for every item, the first
+    step that covered it (:attr:`Coverage.first`), from which a shortest run is replayed."""
     start = time.perf_counter()
     codec = Codec(model)
     index: dict[bytes, int] = {}
@@ -232,9 +242,9 @@ def explore_interpreted(
             if part in seen_axis_parts:
                 continue
             seen_axis_parts.add(part)
-            cid = axis.chart.id  # type: ignore[attr-defined]
-            cov.configs.add((cid, part[0]))  # type: ignore[index]
-            for v, x in zip(axis.c.variables, part[1]):  # type: ignore[attr-defined, index]
+            cid = axis.chart.id
+            cov.configs.add((cid, part[0]))
+            for v, x in zip(axis.c.variables, part[1]):
                 cov.values.add((cid, v, x))
 
     for ai_index, assignment in enumerate(model.assignments):
@@ -255,7 +265,7 @@ def explore_interpreted(
         for p in good:
             reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     bar = None
     task = None
     if show:
@@ -315,6 +325,10 @@ def explore_interpreted(
                     cov.executed.update(facts.executed)
                 if facts.errors:
                     cov.errors.update(facts.errors)
+                if facts.checks:
+                    cov.checks.update(facts.checks)
+                if witnesses and (facts.fired or facts.executed or facts.errors or facts.checks):
+                    _note_witnesses(cov.first, facts, i, ch.index)
                 if bad:
                     for p in bad:
                         if p.name not in violations:
@@ -349,6 +363,18 @@ def explore_interpreted(
 
 class _Stop(Exception):
     pass
+
+
+def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
+    where = (state, choice)
+    for c, t in facts.fired:  # type: ignore[attr-defined]
+        first.setdefault(("transition", c, t), where)
+    for m, s in facts.executed:  # type: ignore[attr-defined]
+        first.setdefault(("cell", m, s), where)
+    for m, e, x in facts.errors:  # type: ignore[attr-defined]
+        first.setdefault(("error", m, e, x), where)
+    for m, c in facts.checks:  # type: ignore[attr-defined]
+        first.setdefault(("check", m, c), where)
 
 
 def is_property_decided(result: SearchResult, p: Property) -> bool:
@@ -443,7 +469,7 @@ def explore(
             widen()
             return pack(*state)
 
-    for ai_index, (state, bad, good) in enumerate(core.initial_states()):
+    for ai_index, (state, bad0, good0) in enumerate(core.initial_states()):
         code = encode(state)
         if code in seen:
             continue
@@ -456,12 +482,12 @@ def explore(
         via.append(ai_index)
         depth_of.append(0)
         initial_assignment[sid] = ai_index
-        for p in bad:
+        for p in bad0:
             violations.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
-        for p in good:
+        for p in good0:
             reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     bar = None
     task = None
     if show:

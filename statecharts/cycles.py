@@ -25,6 +25,8 @@ Cost: O(leaves x valuations x transitions per leaf) guard evaluations per part.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -35,7 +37,7 @@ from statecharts import ir
 from statecharts.expr import Assignment
 
 #: Most (leaf, valuation) pairs a run starts from, for one strongly connected part.
-CYCLE_ENUMERATION_LIMIT = 2_000
+CYCLE_ENUMERATION_LIMIT = 1_000
 #: Most microsteps run for one strongly connected part, over all its runs.
 RUN_STEP_LIMIT = 20_000
 #: Domains up to this size are enumerated in full; larger ones are sampled.
@@ -65,7 +67,7 @@ class _Chart:
         self.by_id = {s.id: s for s in chart.states}
         self.leaves = [s.id for s in chart.leaf_states()]
         eventless: dict[str, list[ir.Transition]] = {}
-        for i, t in sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0])):
+        for _i, t in sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0])):
             if t.event is None:
                 eventless.setdefault(t.source, []).append(t)
         # what the engine tries in a leaf: the leaf's own transitions first, then each ancestor's
@@ -113,6 +115,19 @@ def eventless_cycles(
     chart: ir.Chart, parameters: Mapping[str, Sequence[object]] | None = None
 ) -> list[EventlessCycle]:
     """The eventless cycles of ``chart`` that can run without end (one per part)."""
+    params = tuple(sorted((k, tuple(v)) for k, v in (parameters or {}).items()))
+    try:
+        return list(_cycles_cached(chart, params))
+    except TypeError:  # a chart holding an unhashable value (a list in a domain)
+        return _eventless_cycles(chart, dict(params))
+
+
+@functools.lru_cache(maxsize=64)
+def _cycles_cached(chart: ir.Chart, params: tuple[tuple[str, tuple[object, ...]], ...]) -> tuple[EventlessCycle, ...]:
+    return tuple(_eventless_cycles(chart, dict(params)))
+
+
+def _eventless_cycles(chart: ir.Chart, parameters: Mapping[str, Sequence[object]]) -> list[EventlessCycle]:
     if any(s.kind is ir.StateKind.PARALLEL for s in chart.states):
         return []
     c = _Chart(chart)
@@ -183,10 +198,8 @@ def _start_values(chart: ir.Chart, name: str, domain: tuple[object, ...] | None)
     unbounded number).  A cycle found from a sample is a real one; none found from a
     sample proves nothing, and the engine's bound stays the guard."""
     initial: object = None
-    try:
+    with contextlib.suppress(KeyError):
         initial = chart.variable(name).initial
-    except KeyError:
-        pass
     if domain is not None:
         if len(domain) <= SMALL_DOMAIN:
             return domain
@@ -231,7 +244,7 @@ def _run(
             for a in effects:
                 if a.target in wanted:
                     env[a.target] = a.value(env)
-        except Exception:  # noqa: BLE001 - a failing action ends the run; the engine reports it
+        except Exception:
             break
         new_vals = tuple(env[n] for n in order)
         if any(domains.get(n) is not None and v not in (domains.get(n) or ()) for n, v in zip(order, new_vals)):
@@ -247,6 +260,6 @@ def _first_enabled(candidates: Sequence[ir.Transition], env: Mapping[str, object
         try:
             if t.guard is None or t.guard(env):
                 return t
-        except Exception:  # noqa: BLE001 - a guard failing on some value cannot prove a cycle
+        except Exception:
             return None
     return None

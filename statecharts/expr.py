@@ -32,7 +32,7 @@ import re
 import warnings
 from collections.abc import Callable, Collection, Mapping, MutableMapping
 from dataclasses import dataclass, field
-from typing import Final, Literal, TypeAlias
+from typing import Any, Final, Literal, TypeAlias, cast
 
 __all__ = [
     "Assignment",
@@ -48,12 +48,21 @@ __all__ = [
 Env: TypeAlias = Mapping[str, object]
 Fn: TypeAlias = Callable[[Env], object]
 
+#: The operator closures below compute on values whose types the language checks when
+#: the operator runs (a spec decides them), so they are typed as dynamic.
+_Dyn: TypeAlias = Any
+_DynFn: TypeAlias = Callable[[Mapping[str, Any]], Any]
+
 #: Longest accepted expression text, in characters.
 MAX_LENGTH: Final = 2000
 #: Deepest accepted AST nesting (counting every AST node on the path from the root).
 MAX_DEPTH: Final = 50
-#: Longest sequence that ``*`` may build by repetition (``'ab' * n``).
-MAX_REPEAT: Final = 1_000_000
+#: Longest string, tuple or list an expression may build (by ``*`` repetition or ``+``).
+MAX_SIZE: Final = 10_000
+#: Longest sequence that ``*`` may build by repetition (``'ab' * n``); kept as an alias.
+MAX_REPEAT: Final = MAX_SIZE
+#: Largest magnitude of an integer product (Logix LINT is 64 bits).
+MAX_INT: Final = 2**63 - 1
 
 _ALLOWED: Final = (
     "allowed: constants, names, dotted names, and/or/not, + - * / // %, "
@@ -101,6 +110,8 @@ def _eval_error(text: str, exc: Exception) -> EvalError:
         return EvalError(f"unknown variable {key!r} in expression {text!r}", text)
     if isinstance(exc, ZeroDivisionError):
         return EvalError(f"division by zero in expression {text!r}", text)
+    if isinstance(exc, LimitError):
+        return EvalError(f"{exc} in expression {text!r}", text)
     return EvalError(f"{type(exc).__name__} in expression {text!r}: {exc}", text)
 
 
@@ -147,7 +158,7 @@ _LEADING_WS = " \t\f\r\n"
 class _Source:
     """Maps parser positions of a (stripped) text back to offsets into the original."""
 
-    __slots__ = ("original", "body", "base", "starts", "lines")
+    __slots__ = ("base", "body", "lines", "original", "starts")
 
     def __init__(self, original: str, body: str, base: int) -> None:
         self.original = original
@@ -228,7 +239,29 @@ def _parse(text: str, mode: Literal["eval", "exec"], what: str) -> tuple[ast.AST
     except ValueError as exc:  # e.g. lone surrogates, null bytes on other versions
         raise ExprError(f"{what} cannot be parsed: {exc}", text, 0) from None
     _check_depth(tree, src)
+    if not body.isascii():
+        _check_identifiers(text, body, src)
     return tree, src
+
+
+def _check_identifiers(text: str, body: str, src: _Source) -> None:
+    """Refuse identifiers that Python would silently NFKC-normalise to other letters
+    (full-width or mathematical-bold letters reading as an ASCII variable name)."""
+    import io
+    import tokenize
+    import unicodedata
+
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(body).readline))
+    except (tokenize.TokenError, SyntaxError, ValueError):
+        return  # the parser accepted it; positions are only a refinement
+    for tok in tokens:
+        if tok.type == tokenize.NAME and not tok.string.isascii():
+            normal = unicodedata.normalize("NFKC", tok.string)
+            if normal != tok.string:
+                raise ExprError(
+                    f"identifier {tok.string!r} uses look-alike Unicode letters (it would read as {normal!r}); "
+                    "write names in ASCII", text, src.at_char(tok.start[0], tok.start[1]))
 
 
 def _check_depth(tree: ast.AST, src: _Source) -> None:
@@ -251,31 +284,46 @@ _NUMBER_TYPES: Final = (int, float, bool)
 _SEQUENCE_TYPES: Final = (str, bytes, tuple, list)
 
 
-def _mul(a: object, b: object) -> object:
+class LimitError(ValueError):
+    """An expression would build a value larger than the language allows."""
+
+
+def _mul(a: _Dyn, b: _Dyn) -> object:
     ta = type(a)
     tb = type(b)
+    if ta is int and tb is int:
+        r = a * b
+        if -MAX_INT <= r <= MAX_INT:
+            return r
+        raise LimitError(f"integer product beyond 64 bits (at most {MAX_INT} in magnitude)")
     if (ta is int or ta is float or ta is bool) and (tb is int or tb is float or tb is bool):
-        return a * b  # type: ignore[operator]
+        return a * b
     if isinstance(a, _SEQUENCE_TYPES) and isinstance(b, int):
-        if len(a) * b > MAX_REPEAT:
-            raise ValueError(f"sequence repetition longer than {MAX_REPEAT}")
-    elif isinstance(b, _SEQUENCE_TYPES) and isinstance(a, int):
-        if len(b) * a > MAX_REPEAT:
-            raise ValueError(f"sequence repetition longer than {MAX_REPEAT}")
-    return a * b  # type: ignore[operator]
+        if len(a) * b > MAX_SIZE:
+            raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
+    elif isinstance(b, _SEQUENCE_TYPES) and isinstance(a, int) and len(b) * a > MAX_SIZE:
+        raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
+    return a * b
 
 
-def _mod(a: object, b: object) -> object:
+def _add(a: _Dyn, b: _Dyn) -> object:
+    r = a + b
+    if type(r) in _SEQUENCE_TYPES and len(r) > MAX_SIZE:
+        raise LimitError(f"concatenation longer than {MAX_SIZE}")
+    return r
+
+
+def _mod(a: _Dyn, b: _Dyn) -> object:
     if isinstance(a, (str, bytes)):
         raise TypeError("string formatting with '%' is not allowed in a spec expression")
-    return a % b  # type: ignore[operator]
+    return a % b
 
 
 def _is_immutable(value: object, depth: int = 0) -> bool:
     if value is None or type(value) in (bool, int, float, str):
         return True
     if depth < MAX_DEPTH and type(value) in (tuple, frozenset):
-        return all(_is_immutable(v, depth + 1) for v in value)  # type: ignore[attr-defined]
+        return all(_is_immutable(v, depth + 1) for v in cast("tuple[object, ...]", value))
     return False
 
 
@@ -286,26 +334,26 @@ def _is_immutable(value: object, depth: int = 0) -> bool:
 # through a closure call in the inner loop.
 
 _BinFactories: TypeAlias = tuple[
-    Callable[[Fn, Fn], Fn], Callable[[Fn, object], Fn], Callable[[object, Fn], Fn]
+    Callable[[_DynFn, _DynFn], Fn], Callable[[_DynFn, _Dyn], Fn], Callable[[_Dyn, _DynFn], Fn]
 ]
 
-_BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], object], _BinFactories]]] = {
+_BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[_Dyn, _Dyn], object], _BinFactories]]] = {
     ast.Add: (
         "+",
-        lambda a, b: a + b,  # type: ignore[operator]
+        _add,
         (
-            lambda l, r: lambda env: l(env) + r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) + c,  # type: ignore[operator]
-            lambda c, r: lambda env: c + r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: _add(l(env), r(env)),
+            lambda l, c: (lambda env: l(env) + c) if type(c) in _NUMBER_TYPES else (lambda env: _add(l(env), c)),
+            lambda c, r: (lambda env: c + r(env)) if type(c) in _NUMBER_TYPES else (lambda env: _add(c, r(env))),
         ),
     ),
     ast.Sub: (
         "-",
-        lambda a, b: a - b,  # type: ignore[operator]
+        lambda a, b: a - b,
         (
-            lambda l, r: lambda env: l(env) - r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) - c,  # type: ignore[operator]
-            lambda c, r: lambda env: c - r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) - r(env),
+            lambda l, c: lambda env: l(env) - c,
+            lambda c, r: lambda env: c - r(env),
         ),
     ),
     ast.Mult: (
@@ -319,20 +367,20 @@ _BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], ob
     ),
     ast.Div: (
         "/",
-        lambda a, b: a / b,  # type: ignore[operator]
+        lambda a, b: a / b,
         (
-            lambda l, r: lambda env: l(env) / r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) / c,  # type: ignore[operator]
-            lambda c, r: lambda env: c / r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) / r(env),
+            lambda l, c: lambda env: l(env) / c,
+            lambda c, r: lambda env: c / r(env),
         ),
     ),
     ast.FloorDiv: (
         "//",
-        lambda a, b: a // b,  # type: ignore[operator]
+        lambda a, b: a // b,
         (
-            lambda l, r: lambda env: l(env) // r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) // c,  # type: ignore[operator]
-            lambda c, r: lambda env: c // r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) // r(env),
+            lambda l, c: lambda env: l(env) // c,
+            lambda c, r: lambda env: c // r(env),
         ),
     ),
     ast.Mod: (
@@ -357,15 +405,15 @@ _REFUSED_BINOPS: Final[dict[type[ast.operator], str]] = {
 }
 
 
-def _contains(a: object, b: object) -> bool:
-    return a in b  # type: ignore[operator]
+def _contains(a: _Dyn, b: _Dyn) -> bool:
+    return a in b
 
 
-def _not_contains(a: object, b: object) -> bool:
-    return a not in b  # type: ignore[operator]
+def _not_contains(a: _Dyn, b: _Dyn) -> bool:
+    return a not in b
 
 
-_CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[object, object], object], _BinFactories]]] = {
+_CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[_Dyn, _Dyn], object], _BinFactories]]] = {
     ast.Eq: (
         lambda a, b: a == b,
         (
@@ -383,66 +431,66 @@ _CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[object, object], object], _
         ),
     ),
     ast.Lt: (
-        lambda a, b: a < b,  # type: ignore[operator]
+        lambda a, b: a < b,
         (
-            lambda l, r: lambda env: l(env) < r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) < c,  # type: ignore[operator]
-            lambda c, r: lambda env: c < r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) < r(env),
+            lambda l, c: lambda env: l(env) < c,
+            lambda c, r: lambda env: c < r(env),
         ),
     ),
     ast.LtE: (
-        lambda a, b: a <= b,  # type: ignore[operator]
+        lambda a, b: a <= b,
         (
-            lambda l, r: lambda env: l(env) <= r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) <= c,  # type: ignore[operator]
-            lambda c, r: lambda env: c <= r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) <= r(env),
+            lambda l, c: lambda env: l(env) <= c,
+            lambda c, r: lambda env: c <= r(env),
         ),
     ),
     ast.Gt: (
-        lambda a, b: a > b,  # type: ignore[operator]
+        lambda a, b: a > b,
         (
-            lambda l, r: lambda env: l(env) > r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) > c,  # type: ignore[operator]
-            lambda c, r: lambda env: c > r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) > r(env),
+            lambda l, c: lambda env: l(env) > c,
+            lambda c, r: lambda env: c > r(env),
         ),
     ),
     ast.GtE: (
-        lambda a, b: a >= b,  # type: ignore[operator]
+        lambda a, b: a >= b,
         (
-            lambda l, r: lambda env: l(env) >= r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) >= c,  # type: ignore[operator]
-            lambda c, r: lambda env: c >= r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) >= r(env),
+            lambda l, c: lambda env: l(env) >= c,
+            lambda c, r: lambda env: c >= r(env),
         ),
     ),
     ast.In: (
         _contains,
         (
-            lambda l, r: lambda env: l(env) in r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) in c,  # type: ignore[operator]
-            lambda c, r: lambda env: c in r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) in r(env),
+            lambda l, c: lambda env: l(env) in c,
+            lambda c, r: lambda env: c in r(env),
         ),
     ),
     ast.NotIn: (
         _not_contains,
         (
-            lambda l, r: lambda env: l(env) not in r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) not in c,  # type: ignore[operator]
-            lambda c, r: lambda env: c not in r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) not in r(env),
+            lambda l, c: lambda env: l(env) not in c,
+            lambda c, r: lambda env: c not in r(env),
         ),
     ),
 }
 
 _REFUSED_CMPOPS: Final[dict[type[ast.cmpop], str]] = {ast.Is: "is", ast.IsNot: "is not"}
 
-_CMP_NAME_CONST: Final[dict[type[ast.cmpop], Callable[[str, object], Fn]]] = {
+_CMP_NAME_CONST: Final[dict[type[ast.cmpop], Callable[[str, _Dyn], _DynFn]]] = {
     ast.Eq: lambda k, c: lambda env: env[k] == c,
     ast.NotEq: lambda k, c: lambda env: env[k] != c,
-    ast.Lt: lambda k, c: lambda env: env[k] < c,  # type: ignore[operator]
-    ast.LtE: lambda k, c: lambda env: env[k] <= c,  # type: ignore[operator]
-    ast.Gt: lambda k, c: lambda env: env[k] > c,  # type: ignore[operator]
-    ast.GtE: lambda k, c: lambda env: env[k] >= c,  # type: ignore[operator]
-    ast.In: lambda k, c: lambda env: env[k] in c,  # type: ignore[operator]
-    ast.NotIn: lambda k, c: lambda env: env[k] not in c,  # type: ignore[operator]
+    ast.Lt: lambda k, c: lambda env: env[k] < c,
+    ast.LtE: lambda k, c: lambda env: env[k] <= c,
+    ast.Gt: lambda k, c: lambda env: env[k] > c,
+    ast.GtE: lambda k, c: lambda env: env[k] >= c,
+    ast.In: lambda k, c: lambda env: env[k] in c,
+    ast.NotIn: lambda k, c: lambda env: env[k] not in c,
 }
 
 
@@ -495,7 +543,7 @@ class _Node:
     """A compiled sub-expression: its closure, its value when it is a constant, and
     (for a tuple/list/set display of constants) the constant members."""
 
-    __slots__ = ("fn", "const", "value", "members", "key")
+    __slots__ = ("const", "fn", "key", "members", "value")
 
     def __init__(self, fn: Fn, const: bool = False, value: object = None) -> None:
         self.fn = fn
@@ -513,6 +561,8 @@ def _folded(fn: Fn) -> _Node:
     """Evaluate a closure built only from constants once; keep it lazy if that fails."""
     try:
         value = fn({})
+    except LimitError:
+        raise  # reported at load time: the value would be too large whenever it is computed
     except (ArithmeticError, TypeError, ValueError):
         return _Node(fn)  # the error belongs to run time, where it is reported with context
     if _is_immutable(value):
@@ -565,9 +615,9 @@ class _Compiler:
     def read(self, node: ast.expr) -> _Node:
         key, off = self.path(node)
         self.names.setdefault(key, off)
-        node = _Node(lambda env: env[key])
-        node.key = key
-        return node
+        leaf = _Node(lambda env: env[key])
+        leaf.key = key
+        return leaf
 
     # -- dispatch
 
@@ -679,9 +729,11 @@ class _Compiler:
             else:
                 fn = lambda env: not f(env)  # noqa: E731
         elif isinstance(node.op, ast.USub):
-            fn = lambda env: -f(env)  # type: ignore[operator]  # noqa: E731
+            dyn: _DynFn = f
+            fn = lambda env: -dyn(env)  # noqa: E731
         else:
-            fn = lambda env: +f(env)  # type: ignore[operator]  # noqa: E731
+            pos: _DynFn = f
+            fn = lambda env: +pos(env)  # noqa: E731
         return _folded(fn) if operand.const else _Node(fn)
 
     def binop(self, node: ast.BinOp) -> _Node:
@@ -822,7 +874,10 @@ def _build_expression(text: str) -> tuple[Expr, dict[str, int]]:
     tree, src = _parse(text, "eval", "expression")
     assert isinstance(tree, ast.Expression)
     comp = _Compiler(src)
-    node = comp.expr(tree.body)
+    try:
+        node = comp.expr(tree.body)
+    except LimitError as exc:
+        raise ExprError(f"{exc} in expression {text!r}", text, 0) from None
     return Expr(text, frozenset(comp.names), node.fn), comp.names
 
 
@@ -872,7 +927,10 @@ def _build_assignment(text: str) -> tuple[Assignment, dict[str, int], int]:
     else:
         kind = type(stmt).__name__.lower()
         raise comp.refuse(f"{kind} statement", stmt)
-    node = comp.expr(value_node)
+    try:
+        node = comp.expr(value_node)
+    except LimitError as exc:
+        raise ExprError(f"{exc} in action {text!r}", text, 0) from None
     value = Expr(value_text, frozenset(comp.names), node.fn)
     return Assignment(text, target, value), comp.names, target_off
 
@@ -889,11 +947,27 @@ def _load_copy(t: ast.expr) -> ast.expr:
 
 def parse_expression(text: str) -> Expr:
     """Parse and check a guard/check expression; raise ExprError if not allowed."""
-    return _build_expression(text)[0]
+    if not isinstance(text, str):
+        return _build_expression(text)[0]
+    return _parse_expression_cached(text)
 
 
 def parse_assignment(text: str) -> Assignment:
     """Parse ``target = expr`` (or ``+=`` / ``-=``); raise ExprError if not allowed."""
+    if not isinstance(text, str):
+        return _build_assignment(text)[0]
+    return _parse_assignment_cached(text)
+
+
+# Expressions are immutable and their closures hold no state, so one parse per text serves
+# every load (an error is not cached: it is raised again from a fresh parse).
+@functools.lru_cache(maxsize=8192)
+def _parse_expression_cached(text: str) -> Expr:
+    return _build_expression(text)[0]
+
+
+@functools.lru_cache(maxsize=8192)
+def _parse_assignment_cached(text: str) -> Assignment:
     return _build_assignment(text)[0]
 
 
@@ -926,3 +1000,77 @@ def check_names(expr: Expr | Assignment, known: Collection[str]) -> list[tuple[s
         else:
             pairs = tuple((n, 0) for n in sorted(expr.names))
     return sorted(((n, off) for n, off in pairs if n not in known), key=lambda p: (p[1], p[0]))
+
+
+# --------------------------------------------------------------------------- result kinds
+
+#: The kinds :func:`result_kinds` speaks of.
+KINDS: Final = frozenset({"bool", "int", "real", "str", "none"})
+
+
+def result_kinds(expr: Expr, kinds: Mapping[str, frozenset[str]]) -> tuple[frozenset[str], tuple[object, ...]]:
+    """What ``expr`` can evaluate to, without running it: (kinds, constants).
+
+    ``kinds`` maps each variable to the kinds it may hold (absent: any kind).  The
+    result is a subset of :data:`KINDS`, or all of them when it cannot be told; the
+    constants are the literal values among the possible results (the branches of
+    ``a if c else b`` that are literals), for domain checks.
+    """
+    try:
+        tree = ast.parse(expr.text.lstrip(_LEADING_WS), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return KINDS, ()
+    consts: list[object] = []
+    found = _kinds(tree.body, kinds, consts, 0)
+    return found, tuple(consts)
+
+
+def _kinds(node: ast.AST, kinds: Mapping[str, frozenset[str]], consts: list[object], depth: int) -> frozenset[str]:
+    if depth > MAX_DEPTH:
+        return KINDS
+    if isinstance(node, ast.Constant):
+        v = node.value
+        consts.append(v)
+        if isinstance(v, bool):
+            return frozenset({"bool"})
+        if isinstance(v, int):
+            return frozenset({"int"})
+        if isinstance(v, float):
+            return frozenset({"real"})
+        if isinstance(v, str):
+            return frozenset({"str"})
+        if v is None:
+            return frozenset({"none"})
+        return KINDS
+    if isinstance(node, (ast.Compare, ast.BoolOp)) or (isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not)):
+        return frozenset({"bool"})
+    if isinstance(node, (ast.Name, ast.Attribute)):
+        name = _dotted(node)
+        return kinds.get(name, KINDS) if name is not None else KINDS
+    if isinstance(node, ast.IfExp):
+        return _kinds(node.body, kinds, consts, depth + 1) | _kinds(node.orelse, kinds, consts, depth + 1)
+    ignored: list[object] = []
+    if isinstance(node, ast.UnaryOp):
+        inner = _kinds(node.operand, kinds, ignored, depth + 1)
+        return _numeric(inner)
+    if isinstance(node, ast.BinOp):
+        left = _kinds(node.left, kinds, ignored, depth + 1)
+        right = _kinds(node.right, kinds, ignored, depth + 1)
+        if isinstance(node.op, ast.Div):
+            return frozenset({"real"})
+        if isinstance(node.op, (ast.Add, ast.Mult)) and ("str" in left or "str" in right):
+            return KINDS
+        return _numeric(left | right)
+    if isinstance(node, ast.Call) and _dotted(node.func) in _FUNCTIONS:
+        out: frozenset[str] = frozenset()
+        for a in node.args:
+            out |= _kinds(a, kinds, ignored, depth + 1)
+        return out or KINDS
+    return KINDS
+
+
+def _numeric(kinds: frozenset[str]) -> frozenset[str]:
+    """Arithmetic on these kinds gives a number: real if a real may be involved."""
+    if not kinds <= {"bool", "int", "real"}:
+        return KINDS
+    return frozenset({"real"}) if "real" in kinds else frozenset({"int", "real"} & ({"int"} | kinds))

@@ -23,7 +23,7 @@ from checker.properties import load_properties
 from checker.search import SearchResult, explore, explore_interpreted, stored_bytes
 from checker.system import SystemDef, bundled_systems, load_system
 from statecharts import ir
-from strategies import checking_systems
+from motionchart.strategies import checking_systems
 
 #: random systems larger than this are skipped (the interpreter explores them slowly)
 LIMIT = 2000
@@ -52,7 +52,7 @@ def base(spec: ir.Spec) -> SystemDef:
     return load_system(bundled_systems()["noncip"], spec)
 
 
-@settings(suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much], max_examples=15)
+@settings(suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much], max_examples=10)
 @given(data=st.data())
 def test_random_small_systems_agree(spec: ir.Spec, base: SystemDef, data: st.DataObject) -> None:
     sysdef = data.draw(checking_systems(spec, base), label="system")
@@ -70,13 +70,13 @@ def test_random_small_systems_agree(spec: ir.Spec, base: SystemDef, data: st.Dat
 def test_two_interchangeable_axes_agree(spec: ir.Spec, base: SystemDef) -> None:
     import dataclasses
 
-    g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MDO", "MAFR"),
-                            configurations=base.groups[0].configurations[:2])
+    g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MAFR"),
+                            configurations=base.groups[0].configurations[:1])
     sysdef = dataclasses.replace(base, name="two_axes", groups=(g,), max_live_calls=1)
     props = load_properties(spec)
     compiled = explore(Model(spec, sysdef, props), progress=False)
     interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False)
-    assert compiled.complete and compiled.states > 500
+    assert compiled.complete and compiled.states > 20
     _same(compiled, interpreted)
 
 

@@ -167,8 +167,12 @@ def test_the_docs_have_examples_of_every_kind() -> None:
 
 @pytest.mark.parametrize("block", SCENARIO_BLOCKS, ids=[b.id for b in SCENARIO_BLOCKS])
 def test_scenario_example_passes(block: Block, spec: ir.Spec, tmp_path: Path) -> None:
-    path = tmp_path / f"{block.file.stem}_{block.line}.yaml"
-    path.write_text(block.text, encoding="utf-8")
+    if block.name:
+        # a named scenario sees the other named files (a program it runs) beside it
+        path = workspace(tmp_path) / block.name
+    else:
+        path = tmp_path / f"{block.file.stem}_{block.line}.yaml"
+        path.write_text(block.text, encoding="utf-8")
     scenario = load_scenario(path, spec)
     result = run_scenario(scenario, spec)
     assert result.passed, f"{block.id}: " + "; ".join(str(m) for m in result.mismatches)
@@ -188,11 +192,9 @@ def test_console_example_prints_what_the_docs_show(
 ) -> None:
     monkeypatch.chdir(workspace(tmp_path))
     buffer = io.StringIO()
-    with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(buffer):
-        try:
-            main(list(command.argv))
-        except SystemExit:  # --help, --version and usage errors exit through argparse
-            pass
+    # --help, --version and usage errors exit through argparse
+    with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(buffer), contextlib.suppress(SystemExit):
+        main(list(command.argv))
     got, want = normalise(buffer.getvalue()), normalise(command.expected)
     checker = doctest.OutputChecker()
     if not checker.check_output(want, got, doctest.ELLIPSIS):
@@ -226,9 +228,7 @@ def test_relative_links_resolve(doc: Path) -> None:
             continue
         file_part, _, anchor = target.partition("#")
         dest = (doc.parent / file_part).resolve() if file_part else doc
-        if not dest.exists():
-            broken.append(target)
-        elif anchor and dest.suffix == ".md" and anchor not in heading_anchors(dest):
+        if not dest.exists() or (anchor and dest.suffix == ".md" and anchor not in heading_anchors(dest)):
             broken.append(target)
     assert not broken, f"{doc.name}: broken links {broken}"
 

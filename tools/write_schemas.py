@@ -7,7 +7,8 @@ from pathlib import Path
 ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
 EXPR = {"type": "string", "minLength": 1}
 ACTIONS = {"type": "array", "items": EXPR}
-SOURCE = {"type": "string", "minLength": 1, "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
+SOURCE = {"type": "string", "minLength": 1,
+          "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
 INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$", "description": "Id of an interpretation in interpretations.yaml."}
 CONF = {"enum": ["C", "C3", "I", "U"]}
 SCALAR = {"type": ["boolean", "integer", "number", "string"]}
@@ -20,6 +21,7 @@ variable = {
         "domain": {"type": "array", "items": SCALAR, "minItems": 1},
         "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
         "initial": SCALAR, "description": {"type": "string"},
+        "writable": {"type": "boolean", "description": "A program may write this attribute (SSV): a scenario step may `set:` it."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -34,6 +36,9 @@ state = {
         "description": {"type": "string"},
         "entry": ACTIONS, "exit": ACTIONS,
         "states": {"type": "array", "items": {"$ref": "#/$defs/state"}},
+        "implies": {"type": "object", "additionalProperties": SCALAR,
+                    "description": ("Values of chart variables that an axis set up in this state (or a descendant) has, "
+                                    "e.g. a connected drive with its DC bus up.")},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -217,7 +222,17 @@ schema = {
     "$defs": {"state": state},
 }
 NAME_KEY = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
-OBS = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}
+EXPECTED = {"oneOf": [
+    {"type": ["boolean", "integer", "number", "string"]},
+    {"type": "object", "additionalProperties": False, "required": ["approx", "within"],
+     "description": "A number within a tolerance: a number at least 0, or a named tolerance such as dac_step.",
+     "properties": {"approx": {"type": "number"}, "within": {"type": ["number", "string"]}}},
+    {"type": "object", "additionalProperties": False, "required": ["not"],
+     "description": "Any value but this one.", "properties": {"not": {"type": ["boolean", "integer", "number", "string"]}}},
+    {"type": "array", "minItems": 1, "items": {"type": "string"},
+     "description": "passes_through: states the axis is in during the step, in this order."},
+]}
+OBS = {"type": "object", "additionalProperties": EXPECTED}
 #: a ladder program file (rung text or L5X), relative to the scenario
 PROGRAM_FILE = {"type": "string", "minLength": 1}
 #: program tag values by path (``START_PB``, ``Arr[2]``, ``T1.PRE``)
@@ -257,6 +272,8 @@ scenario = {
                         "properties": {
                             "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
                             "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                            "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
+                                       "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
                         }}},
                     PROGRAM_FILE,
                     {"type": "object", "additionalProperties": False, "required": ["file"],
@@ -272,6 +289,11 @@ scenario = {
                 "name": {"type": "string"},
                 "prescan": {"type": "boolean"},
                 "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
+                "within": {"type": "integer", "minimum": 1, "maximum": 100000,
+                           "description": "The step lasts until its expectations hold, at most this many scans."},
+                "set": {"type": "object",
+                        "additionalProperties": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                        "description": "Attribute writes before the step's first scan, as SSV does: {axis: {attribute: value}}."},
                 "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
                 "operands": {"type": "object", "additionalProperties": {
                     "type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}},
@@ -370,10 +392,16 @@ SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
 # the add-on instruction's own languages (docs/aoi.md); defined beside their loader
-from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import AOI_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA  # noqa: E402
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
+
+# the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
+from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS  # noqa: E402
+
+SCHEMAS.update(CONFORMANCE_SCHEMAS)
 
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"

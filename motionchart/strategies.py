@@ -1,4 +1,19 @@
-"""Hypothesis strategies built from the IR, shared by the property tests.
+"""Hypothesis strategies built from the IR, for property tests of the spec, of a user's
+programs and scenarios, and of other implementations.
+
+* :func:`scenarios` / :func:`scenario_documents` -- valid scenarios for a chart and a set
+  of instructions (set-up, program, steps with rungs, operands and events; no
+  expectations: a property test states those);
+* :func:`input_sequences` -- scan inputs (rung patterns, operand values, environment
+  events) for a program on a set of axes;
+* :func:`fault_injections` -- environment events (faults, shutdowns, ...) scheduled at
+  scans, for a set of axes;
+* :func:`mutated_specs` -- the spec with one seeded fault (a dropped guard, a swapped
+  target, a changed error code), to check that a test notices;
+* the building blocks they are made of (:func:`axis_setups`, :func:`programs`,
+  :func:`operand_sets`, :func:`environment_events`, :func:`scan_timings`...).
+
+``docs/api.md`` has an example property test for each.
 
 Everything here is *derived from the loaded spec* (instruction names, operand domains,
 environment events, axis types, leaf states, variable domains), so a new instruction,
@@ -13,14 +28,40 @@ past the precondition checks; every other value of the domain is still drawn.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from hypothesis import strategies as st
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import EnvironmentEvent
+from statecharts.scan import EnvironmentEvent, ScanInputs
+from statecharts.scenario import Scenario, load_scenario_document
+
+__all__ = [
+    "SCAN_TIMINGS",
+    "AxisSetup",
+    "axis_setups",
+    "checking_systems",
+    "environment_event_names",
+    "environment_events",
+    "fault_injections",
+    "input_sequences",
+    "instruction_names",
+    "instructions_for",
+    "mutated_specs",
+    "operand_sets",
+    "operand_values",
+    "programs",
+    "rung_patterns",
+    "scan_timings",
+    "scenario_documents",
+    "scenarios",
+    "tag_name",
+    "value_operands",
+]
 
 #: Axis variables a set-up draws, besides the axis type and the initial state.
 SETUP_VARIABLES = ("FaultAction", "Configured", "AxisConfiguration")
@@ -107,10 +148,10 @@ def programs(
     The result is a program as :class:`statecharts.scan.System` takes it:
     ``(tag, mnemonic, axis)`` triples in spec order.
     """
-    ins = instructions_for(spec, chart)
-    return st.tuples(
-        *(st.sampled_from(list(axis_names)).map(lambda ax, i=i: (tag_name(i.id), i.id, ax)) for i in ins)
-    )
+    def bound(i: ir.Instruction) -> st.SearchStrategy[tuple[str, str, str]]:
+        return st.sampled_from(list(axis_names)).map(lambda ax: (tag_name(i.id), i.id, ax))
+
+    return st.tuples(*(bound(i) for i in instructions_for(spec, chart)))
 
 
 def rung_patterns(tags: Sequence[str]) -> st.SearchStrategy[dict[str, bool]]:
@@ -174,7 +215,7 @@ def axis_setups(
     preferred_type = known["AxisType"].initial if "AxisType" in known else None
     initial_leaf = chart.root_initial
     while chart.state(initial_leaf).kind is ir.StateKind.COMPOUND:
-        initial_leaf = chart.state(initial_leaf).initial  # type: ignore[assignment]
+        initial_leaf = chart.state(initial_leaf).initial or initial_leaf
     leaves = [s.id for s in chart.leaf_states()]
     drawn = st.fixed_dictionaries({n: _variable_values(known[n]) for n in variables if n in known})
     return st.builds(
@@ -186,6 +227,175 @@ def axis_setups(
     )
 
 
+# --------------------------------------------------------------------------- scan inputs
+
+
+def input_sequences(
+    spec: ir.Spec,
+    chart: ir.Chart,
+    axis_names: Sequence[str],
+    program: Sequence[tuple[str, str, str]] | None = None,
+    *,
+    min_size: int = 1,
+    max_size: int = 12,
+) -> st.SearchStrategy[list[ScanInputs]]:
+    """Inputs for consecutive scans of ``program`` (``(tag, mnemonic, axis)`` triples; by
+    default one tag per instruction of ``chart`` on the first axis): each scan changes
+    some rungs, may set operands of the tags whose rung it raises, and may bring
+    environment events for ``axis_names``."""
+    if program is None:
+        program = [(tag_name(i.mnemonic), i.mnemonic, axis_names[0]) for i in _by_mnemonic(spec, chart)]
+    tags = [t for t, _m, _a in program]
+    by_tag = {t: _variant(spec, chart, m) for t, m, _a in program}
+
+    @st.composite
+    def one(draw: st.DrawFn) -> ScanInputs:
+        rungs = draw(rung_patterns(tags)) if tags else {}
+        operands = {t: draw(operand_sets(by_tag[t])) for t, on in rungs.items() if on and value_operands(by_tag[t])}
+        events = draw(environment_events(chart, axis_names, max_size=1)) if axis_names else ()
+        return ScanInputs(rungs=rungs, operands=operands, events=events)
+
+    return st.lists(one(), min_size=min_size, max_size=max_size)
+
+
+def fault_injections(
+    chart: ir.Chart,
+    axis_names: Sequence[str],
+    *,
+    events: Sequence[str] | None = None,
+    max_faults: int = 3,
+    max_scan: int = 20,
+) -> st.SearchStrategy[list[tuple[int, EnvironmentEvent]]]:
+    """Up to ``max_faults`` environment events (by default every event of ``chart`` of
+    kind ``environment``: faults, shutdowns, connection losses...), each on one of
+    ``axis_names`` at a scan in ``0..max_scan``; sorted by scan."""
+    names = list(events) if events is not None else [e.name for e in chart.events if e.kind == "environment"]
+    one = st.tuples(st.integers(0, max_scan),
+                    st.builds(EnvironmentEvent, st.sampled_from(list(axis_names)), st.sampled_from(names)))
+    return st.lists(one, max_size=max_faults).map(lambda xs: sorted(xs, key=lambda x: (x[0], x[1].axis, x[1].event)))
+
+
+# --------------------------------------------------------------------------- whole scenarios
+
+
+def _by_mnemonic(spec: ir.Spec, chart: ir.Chart) -> list[ir.Instruction]:
+    seen: dict[str, ir.Instruction] = {}
+    for i in instructions_for(spec, chart):
+        seen.setdefault(i.mnemonic, i)
+    return list(seen.values())
+
+
+def _variant(spec: ir.Spec, chart: ir.Chart, mnemonic: str) -> ir.Instruction:
+    for i in instructions_for(spec, chart):
+        if i.mnemonic == mnemonic or i.id == mnemonic:
+            return i
+    raise KeyError(f"no instruction {mnemonic!r} for chart {chart.id}")
+
+
+def _plain_value(value: object) -> bool | int | float | str:
+    if isinstance(value, bool | int | float | str):
+        return value
+    return str(value)
+
+
+def scenario_documents(
+    spec: ir.Spec,
+    chart: ir.Chart,
+    instructions: Sequence[str] | None = None,
+    *,
+    axes: int = 1,
+    max_steps: int = 6,
+    max_scans: int = 3,
+    expect: Mapping[str, Mapping[str, object]] | None = None,
+) -> st.SearchStrategy[dict[str, Any]]:
+    """Scenario documents (``format: motionchart-scenario/1``, as a YAML or JSON file
+    holds them) for ``chart``: ``axes`` axes (``Axis1``...) with drawn set-ups, one tag
+    per instruction of ``instructions`` (mnemonics; default every instruction of the
+    chart) on a drawn axis, and up to ``max_steps`` steps of rungs, operands, events and
+    scan counts.
+
+    A scenario must check something: the last step expects ``expect`` (object -> field
+    -> value), by default only that every axis keeps the data type it was configured
+    with (configuration, which no instruction writes).  A property test states the
+    behaviour it checks on the run itself."""
+    variants = [_variant(spec, chart, m) for m in instructions] if instructions else _by_mnemonic(spec, chart)
+    names = [f"Axis{k + 1}" for k in range(axes)]
+    if expect is None and "AxisType" not in {v.name for v in chart.variables}:
+        raise ValueError(f"chart {chart.id} has no AxisType to expect by default; give `expect`")
+
+    @st.composite
+    def build(draw: st.DrawFn) -> dict[str, Any]:
+        scan_ms, coarse_ms = draw(scan_timings())
+        setup_axes: dict[str, Any] = {}
+        for n in names:
+            a = draw(axis_setups(chart, n))
+            entry: dict[str, Any] = {"type": a.axis_type, "state": a.state}
+            if a.variables:
+                entry["variables"] = {k: _plain_value(v) for k, v in a.variables}
+            setup_axes[n] = entry
+        program = [{"tag": tag_name(i.mnemonic), "instruction": i.mnemonic, "axis": draw(st.sampled_from(names))}
+                   for i in variants]
+        tags = {p["tag"]: i for p, i in zip(program, variants)}
+        steps: list[dict[str, Any]] = []
+        for _ in range(draw(st.integers(1, max_steps))):
+            step: dict[str, Any] = {}
+            if tags:
+                rungs = draw(rung_patterns(list(tags)))
+                step["rungs"] = rungs
+                ops = {t: {k: _plain_value(v) for k, v in draw(operand_sets(tags[t])).items()}
+                       for t, on in rungs.items() if on and value_operands(tags[t])}
+                if ops:
+                    step["operands"] = ops
+            events = draw(environment_events(chart, names, max_size=1))
+            if events:
+                step["events"] = [{"axis": e.axis, "event": e.event} for e in events]
+            scans = draw(st.integers(1, max_scans))
+            if scans > 1:
+                step["scans"] = scans
+            steps.append(step or {"scans": 1})
+        steps[-1]["expect"] = ({n: {"AxisType": setup_axes[n]["type"]} for n in names} if expect is None
+                               else {o: dict(f) for o, f in expect.items()})
+        return {"format": "motionchart-scenario/1", "name": "drawn scenario",
+                "setup": {"scan_ms": scan_ms, "coarse_update_ms": coarse_ms, "axes": setup_axes, "program": program},
+                "steps": steps}
+
+    return build()
+
+
+def _load_document(spec: ir.Spec, doc: Mapping[str, Any]) -> Scenario:
+    return load_scenario_document("<drawn scenario>", json.loads(json.dumps(doc)), spec)
+
+
+def scenarios(
+    spec: ir.Spec,
+    chart: ir.Chart,
+    instructions: Sequence[str] | None = None,
+    **options: Any,
+) -> st.SearchStrategy[Scenario]:
+    """Loaded scenarios (what :func:`statecharts.scenario.run_scenario` takes) drawn by
+    :func:`scenario_documents`; ``options`` are its ``axes``, ``max_steps``, ``max_scans``
+    and ``expect``."""
+    return scenario_documents(spec, chart, instructions, **options).map(lambda d: _load_document(spec, d))
+
+
+# --------------------------------------------------------------------------- mutated specs
+
+
+def mutated_specs(
+    spec: ir.Spec, *, kinds: Sequence[str] | None = None, where: str = ""
+) -> st.SearchStrategy[tuple[ir.Spec, Any]]:
+    """``(mutant, mutation)``: ``spec`` with one seeded fault from
+    :func:`checker.mutate.single_mutants` (``kinds`` among ``drop_guard``,
+    ``swap_target``, ``error_code``; default all), of the element whose ``where``
+    starts with ``where`` (``"MSO:"``, ``"AxisNonCIP:"``...).  A test that passes on
+    ``spec`` and on every mutant checks nothing those faults change."""
+    from checker.mutate import single_mutants
+
+    mutants = [(m, how) for m, how in single_mutants(spec)
+               if (kinds is None or how.kind in kinds) and how.where.startswith(where)]
+    if not mutants:
+        raise ValueError("the spec has no mutants of the requested kinds")
+    return st.sampled_from(mutants)
 # --------------------------------------------------------------------------- checking systems
 
 

@@ -34,9 +34,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from checker.coverage import table as coverage_table  # noqa: E402
 from checker.model import Model  # noqa: E402
 from checker.properties import load_properties  # noqa: E402
-from checker.coverage import table as coverage_table  # noqa: E402
 from checker.search import explore, stored_bytes  # noqa: E402
 from checker.system import bundled_systems, load_system  # noqa: E402
 from statecharts.loader import bundled_spec_dir, load_spec  # noqa: E402

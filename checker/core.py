@@ -62,7 +62,7 @@ Example::
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -77,6 +77,10 @@ NOTHING, RAISE, DROP, EVENT, PRESCAN_PASS = 0, 1, 2, 3, 4
 _CONDITIONS = ("rung_false", "rung_true", "prescan")
 
 State = tuple[int, ...]
+#: a block's step under no input: (block, violated, reached)
+BlockStep = tuple[tuple[int, ...], list["Property"], list["Property"]]
+#: the moves of a block's own choices: (choice, block, violated, reached)
+Moves = list[tuple[int, tuple[int, ...], list["Property"], list["Property"]]]
 _NONE: tuple[Property, ...] = ()
 
 
@@ -190,9 +194,9 @@ class CompiledModel:
         self._watch_memo: list[dict[tuple[tuple[int, ...], int], tuple[tuple[int, ...], tuple[Property, ...],
                                                                   tuple[Property, ...]]]] = [{} for _ in model.axes]
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
-        self._block_memo: list[dict[tuple[object, ...], tuple[object, ...]]] = [{} for _ in model.axes]
+        self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
-        self._own_memo: list[dict[tuple[object, ...], tuple[object, ...]]] = [{} for _ in model.axes]
+        self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         # blocks of interchangeable axes share their move tables (the leader's choices)
         self._leader = list(range(self.naxes))
         self._remap: list[dict[int, int]] = [{} for _ in model.axes]
@@ -268,7 +272,7 @@ class CompiledModel:
         out.extend(c for c, a, _e in self.events if a == ai)
         return out
 
-    def _canonical_function(self):  # type: ignore[no-untyped-def]
+    def _canonical_function(self) -> Callable[[list[int]], State]:
         """The canonicalisation for this layout: nothing to do without symmetry, a plain
         sort when the axes are one group of one-slot blocks, else :meth:`canonical`."""
         groups = self.symmetric_groups
@@ -738,15 +742,15 @@ class CompiledModel:
             key = (state[start:start + n], mode)
             r = self._own_memo[ai].get(key)
             if r is not None:
-                return r  # type: ignore[return-value]
+                return r
             leader = self._leader[ai]
             if leader != ai:
                 r = self._block_memo[leader].get(key)
                 if r is not None:
                     remap = self._remap[ai]
-                    r2 = (r[0], [(remap[c], b, x, y) for c, b, x, y in r[1]])  # type: ignore[index]
+                    r2 = (r[0], [(remap[c], b, x, y) for c, b, x, y in r[1]])
                     self._remember(ai, key, r2)
-                    return r2  # type: ignore[return-value]
+                    return r2
         aid = state[start]
         tags = state[start + 1:start + n]
         active, watch = self.context(ai, state)
@@ -770,7 +774,7 @@ class CompiledModel:
                 self._block_memo[ai][key] = (base, out)
         return base, out
 
-    def _remember(self, ai: int, key: tuple[object, ...], value: tuple[object, ...]) -> None:
+    def _remember(self, ai: int, key: tuple[object, ...], value: tuple[BlockStep, Moves]) -> None:
         memo = self._own_memo[ai]
         if len(memo) > 300_000:  # bounded: a block memo is a cache, not state
             memo.clear()
@@ -818,7 +822,7 @@ class CompiledModel:
                     # permutation that canonicalisation undoes: expand one of them
                     gk = (g, key)
                     if gk in expanded:
-                        mv = ()
+                        mv = []
                     else:
                         expanded.add(gk)
             all_moves.append(mv)
@@ -843,15 +847,15 @@ class CompiledModel:
                     out.append((c, canonical(v), bad, good))
         if self.has_prescan and not busy:
             v = [nphase]
-            bad = []
-            good = []
+            p_bad: list[Property] = []
+            p_good: list[Property] = []
             for ai in range(naxes):
                 start = self.block_start[ai]
                 n = self.block_len[ai]
-                a2, t2, b, g = self._block(ai, state[start], list(state[start + 1:start + n]), PRESCAN, NOTHING, 0, None)
+                a2, t2, pb, pg = self._block(ai, state[start], list(state[start + 1:start + n]), PRESCAN, NOTHING, 0, None)
                 v.append(a2)
                 v.extend(t2)
-                bad.extend(b)
-                good.extend(g)
-            out.append((self.prescan_index, canonical(v), bad, good))
+                p_bad.extend(pb)
+                p_good.extend(pg)
+            out.append((self.prescan_index, canonical(v), p_bad, p_good))
         return out

@@ -399,7 +399,7 @@ def mutated_specs(
 # --------------------------------------------------------------------------- checking systems
 
 
-def checking_systems(spec: ir.Spec, base: object) -> st.SearchStrategy[object]:
+def checking_systems(spec: ir.Spec, base: Any) -> st.SearchStrategy[Any]:
     """Small model-checking systems (:class:`checker.system.SystemDef`) varied from ``base``:
     an axis chart and type, one or two interchangeable axes, a start state and set-up
     variables, up to three instruction calls, up to three environment events, the
@@ -411,7 +411,7 @@ def checking_systems(spec: ir.Spec, base: object) -> st.SearchStrategy[object]:
     charts = [c for c in spec.charts if instructions_for(spec, c)]
 
     @st.composite
-    def build(draw: st.DrawFn) -> object:
+    def build(draw: st.DrawFn) -> Any:
         chart = draw(st.sampled_from(charts))
         setup = draw(axis_setups(chart, "Axis"))
         ids = [i.id for i in instructions_for(spec, chart)]

@@ -22,8 +22,8 @@ from checker.model import Model, ModelError
 from checker.properties import load_properties
 from checker.search import SearchResult, explore, explore_interpreted, stored_bytes
 from checker.system import SystemDef, bundled_systems, load_system
-from statecharts import ir
 from motionchart.strategies import checking_systems
+from statecharts import ir
 
 #: random systems larger than this are skipped (the interpreter explores them slowly)
 LIMIT = 2000

@@ -82,14 +82,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        if args.command == "validate":
-            return _validate(args, sys.stdout)
-        if args.command == "simulate":
-            return _simulate(args, sys.stdout)
-        for extension in (check_cli, render_cli, conformance_cli):
-            code = extension.dispatch(args)
-            if code is not None:
-                return code
+        code = _run_command(args)
+        sys.stdout.flush()
+        return code
     except InputError as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
@@ -102,6 +97,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("motionchart: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        # output that cannot be written (a full disk, /dev/full, a path under a file)
+        target = f" {shown_name(exc.filename)}" if getattr(exc, "filename", None) else " the output"
+        print(f"motionchart {args.command}: cannot write{target}: {exc.strerror or exc}", file=sys.stderr)
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAIL
+
+
+def _run_command(args: argparse.Namespace) -> int:
+    if args.command == "validate":
+        return _validate(args, sys.stdout)
+    if args.command == "simulate":
+        return _simulate(args, sys.stdout)
+    for extension in (check_cli, render_cli, conformance_cli):
+        code = extension.dispatch(args)
+        if code is not None:
+            return code
     return EXIT_USAGE
 
 
@@ -252,13 +265,21 @@ def _aoi_line(docs: Sequence[Any]) -> str:
 
 
 def _print_table(result: ScenarioResult, out: TextIO) -> None:
-    out.write(f"scenario: {result.scenario.name}  ({result.scenario.file})\n")
-    out.write(f"{'scan':>5}  {'step':<28}  changes\n")
+    _print_header(result.scenario, out)
     for row in result.rows:
-        label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
-        changes = "  ".join(f"{scan_label(o, f)}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
-        cu = "" if row.record.coarse_update else " (no coarse update)"
-        out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
+        _print_row(row, out)
+
+
+def _print_header(scenario: Any, out: TextIO) -> None:
+    out.write(f"scenario: {scenario.name}  ({scenario.file})\n")
+    out.write(f"{'scan':>5}  {'step':<28}  changes\n")
+
+
+def _print_row(row: Any, out: TextIO) -> None:
+    label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
+    changes = "  ".join(f"{scan_label(o, f)}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
+    cu = "" if row.record.coarse_update else " (no coarse update)"
+    out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
 
 
 def _result_json(result: ScenarioResult) -> dict[str, object]:
@@ -306,9 +327,14 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
     results: list[ScenarioResult] = []
     input_errors: list[str] = []
     for f in files:
+        streaming = not (args.json or args.quiet or args.summary)
         try:
             scenario = load_scenario(f, spec)
-            result = run_scenario(scenario, spec)
+            if streaming:
+                _print_header(scenario, out)
+            # the table is printed as the scans run; only --json needs the rows afterwards
+            result = run_scenario(scenario, spec, on_row=(lambda row: _print_row(row, out)) if streaming else None,
+                                  keep_rows=bool(args.json))
         except InputError as exc:
             input_errors.extend(str(d) for d in exc.diagnostics)
             for d in exc.diagnostics:
@@ -318,10 +344,8 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
         if args.summary and result.passed:
             continue
         if not args.json:
-            if not (args.quiet or args.summary):
-                _print_table(result, out)
             verdict = "PASS" if result.passed else "FAIL"
-            out.write(f"{verdict} {scenario.name} ({len(result.rows)} scans)\n")
+            out.write(f"{verdict} {scenario.name} ({result.scans} scans)\n")
             for m in result.mismatches:
                 out.write(f"  {m.located(scenario.file)}\n")
             if not (args.quiet or args.summary):

@@ -25,6 +25,7 @@ Cost: O(leaves x valuations x transitions per leaf) guard evaluations per part.
 
 from __future__ import annotations
 
+import functools
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -35,7 +36,7 @@ from statecharts import ir
 from statecharts.expr import Assignment
 
 #: Most (leaf, valuation) pairs a run starts from, for one strongly connected part.
-CYCLE_ENUMERATION_LIMIT = 2_000
+CYCLE_ENUMERATION_LIMIT = 1_000
 #: Most microsteps run for one strongly connected part, over all its runs.
 RUN_STEP_LIMIT = 20_000
 #: Domains up to this size are enumerated in full; larger ones are sampled.
@@ -113,6 +114,19 @@ def eventless_cycles(
     chart: ir.Chart, parameters: Mapping[str, Sequence[object]] | None = None
 ) -> list[EventlessCycle]:
     """The eventless cycles of ``chart`` that can run without end (one per part)."""
+    params = tuple(sorted((k, tuple(v)) for k, v in (parameters or {}).items()))
+    try:
+        return list(_cycles_cached(chart, params))
+    except TypeError:  # a chart holding an unhashable value (a list in a domain)
+        return _eventless_cycles(chart, dict(params))
+
+
+@functools.lru_cache(maxsize=64)
+def _cycles_cached(chart: ir.Chart, params: tuple[tuple[str, tuple[object, ...]], ...]) -> tuple[EventlessCycle, ...]:
+    return tuple(_eventless_cycles(chart, dict(params)))
+
+
+def _eventless_cycles(chart: ir.Chart, parameters: Mapping[str, Sequence[object]]) -> list[EventlessCycle]:
     if any(s.kind is ir.StateKind.PARALLEL for s in chart.states):
         return []
     c = _Chart(chart)

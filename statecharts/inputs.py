@@ -122,3 +122,34 @@ def path_argument_problem(text: str) -> str | None:
     except ValueError as exc:
         return str(exc)
     return None
+
+
+def output_path_problem(text: str, *, directory: bool = False) -> str | None:
+    """Why an output path cannot be written (checked before long work starts), or None.
+
+    The parent must be an existing, writable directory (or, for ``directory=True``, the
+    path itself may be one or be creatable there); an existing path of the wrong kind is
+    refused.
+    """
+    problem = path_problem(text)
+    if problem is not None:
+        return problem
+    try:
+        path = Path(text)
+        if path.exists():
+            if directory and not path.is_dir():
+                return "exists and is not a directory"
+            if not directory and path.is_dir():
+                return "is a directory"
+            target = path if directory else path.parent
+        else:
+            target = path.parent
+            while not target.exists() and target != target.parent:
+                target = target.parent
+        if not target.is_dir():
+            return f"{shown_name(target)} is not a directory"
+        if not os.access(target, os.W_OK | os.X_OK):
+            return f"{shown_name(target)} is not writable"
+    except OSError as exc:
+        return (exc.strerror or str(exc)).lower()
+    return None

@@ -49,7 +49,7 @@ class Run:
 
 def test_xic_xio_and_ote(spec) -> None:  # type: ignore[no-untyped-def]
     r = Run(spec, "XIC(A)XIO(B)OTE(C);")
-    assert r.scan(A=True)["C"] is True  # p93/p95: XIC true when the bit is set, XIO when it is clear
+    assert r.scan(A=True)["C"] is True  # ch. 2 (XIC, XIO): XIC true when the bit is set, XIO when it is clear
     assert r.scan(B=True)["C"] is False  # p96: OTE clears its bit when the rung is false
 
 
@@ -59,13 +59,13 @@ def test_prescan_clears_ote_and_keeps_otl(spec) -> None:  # type: ignore[no-unty
     assert r["C"] is True and r["L"] is True
     r.prescan()
     assert r["C"] is False  # p96: prescan clears the OTE's data bit
-    assert r["L"] is True  # p98: prescan does not modify the OTL's data bit
+    assert r["L"] is True  # ch. 2 (OTL): prescan does not modify the OTL's data bit
 
 
 def test_otl_otu_retain_when_the_rung_is_false(spec) -> None:  # type: ignore[no-untyped-def]
     r = Run(spec, "XIC(S)OTL(L);XIC(R)OTU(L);")
     assert r.scan(S=True)["L"] is True
-    assert r.scan(S=False)["L"] is True  # p98: rung false, OTL leaves the bit
+    assert r.scan(S=False)["L"] is True  # ch. 2 (OTL): rung false, OTL leaves the bit
     assert r.scan(R=True)["L"] is False  # p100: OTU clears it
     assert r.scan(R=False)["L"] is False  # p100: rung false, OTU leaves it
 
@@ -84,7 +84,7 @@ def test_ons_storage_bit(spec) -> None:  # type: ignore[no-untyped-def]
 def test_osr_and_osf(spec) -> None:  # type: ignore[no-untyped-def]
     r = Run(spec, "XIC(A)OSR(SR,QR);XIC(A)OSF(SF,QF);")
     r.prescan()
-    assert (r["SR"], r["QR"], r["SF"], r["QF"]) == (True, False, False, False)  # OSR/OSF prescan rows
+    assert (r["SR"], r["QR"], r["SF"], r["QF"]) == (True, False, False, False)  # ch. 2 OSR/OSF prescan rows (also Rockwell's OSR/OSF reference pages)
     r.scan(A=True)
     assert r["QR"] is False  # storage set by prescan: no rising edge on the first scan
     r.scan(A=False)
@@ -173,7 +173,7 @@ def test_rto_retains(spec) -> None:  # type: ignore[no-untyped-def]
     r.prescan()
     assert (r["T1.ACC"], r["T1.DN"]) == (30, False)  # p127: prescan clears EN, TT, DN, keeps ACC
     r.scan(A=False, R=True)
-    assert (r["T1.ACC"], r["T1.DN"]) == (0, False)  # RES clears ACC and the status bits
+    assert (r["T1.ACC"], r["T1.DN"]) == (0, False)  # ch. 3 (RES): clears ACC and the status bits
 
 
 def test_ctu_ctd_and_res(spec) -> None:  # type: ignore[no-untyped-def]
@@ -187,7 +187,7 @@ def test_ctu_ctd_and_res(spec) -> None:  # type: ignore[no-untyped-def]
     r.scan(U=False).scan(U=True)
     assert (r["C1.ACC"], r["C1.DN"]) == (2, True)  # ACC >= PRE: DN
     r.scan(U=False, D=True)
-    assert (r["C1.ACC"], r["C1.DN"]) == (1, False)  # CTD counts down, DN follows ACC >= PRE
+    assert (r["C1.ACC"], r["C1.DN"]) == (1, False)  # ch. 3 (CTD): counts down, DN follows ACC >= PRE
     r.scan(D=False, R=True)
     assert (r["C1.ACC"], r["C1.CU"], r["C1.CD"]) == (0, False, False)
 

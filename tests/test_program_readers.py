@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -107,16 +108,19 @@ def test_xml_bomb_is_refused(tmp_path: Path, spec) -> None:  # type: ignore[no-u
 
 def test_ten_megabyte_file_is_refused(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
     errors = _errors(tmp_path, "big.rll", b"XIC A OTE B\n" * 900_000, spec)
-    assert errors == [f"{tmp_path}/big.rll:1:1: program is 10,800,000 bytes; the limit is 5,000,000 bytes "
-                      f"(pass a larger max_bytes to read it)"]
+    assert errors == [f"{tmp_path}/big.rll:1:1: program is larger than 5000000 bytes (10800000 bytes)"]
 
 
 def test_not_utf8_and_not_a_regular_file(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
     errors = _errors(tmp_path, "bin.rll", b"XIC A\nOTE \xff\n", spec)
     assert errors[0].startswith(f"{tmp_path}/bin.rll:2:5: program is not UTF-8 text")
     (tmp_path / "dir.rll").mkdir()
-    with pytest.raises(ProgramError, match="not a regular file"):
+    with pytest.raises(ProgramError, match="it is a directory, not a regular file"):
         load_program(tmp_path / "dir.rll", spec=spec)
+    fifo = tmp_path / "fifo.rll"
+    os.mkfifo(fifo)
+    with pytest.raises(ProgramError, match="FIFO"):
+        load_program(fifo, spec=spec)
 
 
 def test_inference_conflicts_are_located(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
@@ -137,3 +141,30 @@ def test_validate_reports_a_bad_program(tmp_path: Path, capsys: pytest.CaptureFi
     assert main(["validate", str(tmp_path / "p.rll")]) == 1
     err = capsys.readouterr().err
     assert "rung 0: instruction 2: motion instruction MAH is not modelled yet" in err
+
+
+def test_l5x_alias_tags_and_unmodelled_types(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+    text = (EXAMPLES / "state_machine.L5X").read_text(encoding="utf-8")
+    aliased = text.replace("<Tags>\n", '<Tags>\n<Tag Name="Start" TagType="Alias" AliasFor="START_PB"></Tag>\n'
+                           '<Tag Name="Ons0" TagType="Alias" AliasFor="Ons[0]"></Tag>\n'
+                           '<Tag Name="In1" TagType="Alias" AliasFor="Local:1:I.Data.0"></Tag>\n'
+                           '<Tag Name="Recipe" TagType="Base" DataType="UDT_Recipe"></Tag>\n', 1)
+    aliased = aliased.replace("XIC(START_PB)", "XIC(Start)").replace("ONS(Ons[0])", "ONS(Ons0)")
+    (tmp_path / "a.L5X").write_text(aliased, encoding="utf-8")
+    program = load_program(tmp_path / "a.L5X", spec=spec)
+    # an alias stands for the tag it names: the routine is the one without aliases
+    assert program.routines == load_program(EXAMPLES / "state_machine.L5X", spec=spec).routines
+    assert "tag In1, an alias for Local:1:I.Data.0 (module I/O data is not modelled), is not modelled" in program.warnings[0]
+    errors = _errors(tmp_path, "b.L5X", aliased.replace("OTL(Fault_Lamp)", "OTL(In1)").replace("MOV(10,State)", "MOV(10,Recipe)"), spec)
+    assert any("tag 'In1' is an alias for Local:1:I.Data.0 (module I/O data is not modelled)" in e for e in errors)
+    assert any("tag 'Recipe' is a UDT_Recipe; the modelled data types are" in e for e in errors)
+
+
+def test_validate_json(capsys: pytest.CaptureFixture[str]) -> None:
+    import json
+    assert main(["validate", "--json", str(EXAMPLES / "state_machine.txt")]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["valid"] is True
+    summary = doc["programs"][0]
+    assert (summary["form"], summary["rungs"], summary["axes"]) == ("neutral", 9, {"Axis1": "AXIS"})
+    assert summary["motion_instructions"] == ["MSF", "MSO"] and summary["unsupported"] == []

@@ -18,6 +18,7 @@ problem points at its line.  What is read:
 
 from __future__ import annotations
 
+import dataclasses
 import xml.etree.ElementTree as ET
 from typing import Any
 
@@ -26,8 +27,10 @@ from defusedxml.ElementTree import DefusedXMLParser
 
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic
-from statecharts.program.ir import ATOMIC_TYPES, AXIS_TYPES, STRUCTURE_TYPES, Program, Routine, Rung, Scalar, SourceLocation, Tag
-from statecharts.program.logix_expr import number_value
+from statecharts.program.ir import (ATOMIC_TYPES, AXIS_TYPES, STRUCTURE_TYPES, Binary, Branch, Element, Index,
+                                    IndirectBit, Instruction, Operand, Program, Reference, Routine, Rung, Scalar,
+                                    SourceLocation, Tag, Unary)
+from statecharts.program.logix_expr import ExpressionSyntaxError, number_value, parse_reference
 from statecharts.program.reader import ProgramError, _capped, check_declared, check_routines
 from statecharts.program.rungtext import RungParser, parse_neutral_rung
 
@@ -109,9 +112,10 @@ def read_l5x(file: str, text: str, *, spec: spec_ir.Spec | None = None, routine:
 
     tags: dict[str, Tag] = {}
     unmodelled: dict[str, str] = {}
+    aliases: dict[str, tuple[Reference, SourceLocation]] = {}
     for scope, holder in (("", controller), (pname, chosen)):
         for el in holder.findall("Tags/Tag"):
-            tag = _tag(el, scope, file, where, err, unmodelled)
+            tag = _tag(el, scope, file, where, err, unmodelled, aliases)
             if tag is not None:
                 tags[tag.name] = tag  # a program tag hides a controller tag of that name
 
@@ -166,6 +170,10 @@ def read_l5x(file: str, text: str, *, spec: spec_ir.Spec | None = None, routine:
         err(chosen, f"program {pname!r} has no ladder routine")
     if errors:
         raise ProgramError(_capped(errors))
+    if aliases:
+        routines = [_without_aliases(r, aliases, errors) for r in routines]
+        if errors:
+            raise ProgramError(_capped(errors))
     names = [r.name for r in routines]
     main = routine or chosen.get("MainRoutineName") or names[0]
     if main not in names:
@@ -173,7 +181,7 @@ def read_l5x(file: str, text: str, *, spec: spec_ir.Spec | None = None, routine:
         raise ProgramError(errors)
     check_routines(file, tuple(routines), errors)
     result = Program(pname, main, tuple(routines), tuple(sorted(tags.values(), key=lambda t: t.name)), "l5x", file,
-                     tuple(f"tag {n} of data type {t} is not modelled and was left out" for n, t in sorted(unmodelled.items())))
+                     tuple(f"tag {n}, {t}, is not modelled and was left out" for n, t in sorted(unmodelled.items())))
     check_declared(result, errors, spec)
     if unmodelled:
         errors[:] = [_unmodelled_message(d, unmodelled) for d in errors]
@@ -186,21 +194,29 @@ def _unmodelled_message(d: Diagnostic, unmodelled: dict[str, str]) -> Diagnostic
     for name, t in unmodelled.items():
         if d.message.startswith(f"undefined tag {name!r}"):
             return Diagnostic(d.file, d.line, d.column, d.path, (
-                f"tag {name!r} is a {t}; the modelled data types are {', '.join(ATOMIC_TYPES + STRUCTURE_TYPES + AXIS_TYPES)}"))
+                f"tag {name!r} is {t}; the modelled data types are {', '.join(ATOMIC_TYPES + STRUCTURE_TYPES + AXIS_TYPES)}"))
     return d
 
 
-def _tag(el: ET.Element, scope: str, file: str, where: Any, err: Any, unmodelled: dict[str, str]) -> Tag | None:
+def _tag(el: ET.Element, scope: str, file: str, where: Any, err: Any, unmodelled: dict[str, str],
+         aliases: dict[str, tuple[Reference, SourceLocation]]) -> Tag | None:
     name = el.get("Name")
     if not name:
         err(el, "a <Tag> without a Name")
         return None
     data_type = el.get("DataType", "")
     if el.get("TagType") == "Alias":
-        unmodelled[name] = f"alias for {el.get('AliasFor', '?')} (alias tags)"
+        target = el.get("AliasFor", "")
+        if ":" in target.split(".")[0] or not target:
+            unmodelled[name] = f"an alias for {target or '?'} (module I/O data is not modelled)"
+        else:
+            try:
+                aliases[name] = (parse_reference(target), SourceLocation(file, *where(el)))
+            except ExpressionSyntaxError as exc:
+                err(el, f"alias tag {name!r}: AliasFor {target!r} is not a tag reference: {exc.message}")
         return None
     if data_type not in ATOMIC_TYPES + STRUCTURE_TYPES + AXIS_TYPES:
-        unmodelled[name] = data_type or "tag without a DataType"
+        unmodelled[name] = f"a {data_type}" if data_type else "a tag without a DataType"
         return None
     dims_text = el.get("Dimensions", "").replace(",", " ").split()
     try:
@@ -266,3 +282,51 @@ def _scalar(text: str, data_type: str) -> Scalar | None:
     if data_type == "BOOL":
         return bool(v)
     return v
+
+
+#: longest chain of alias tags followed (an alias of an alias ...)
+MAX_ALIAS_CHAIN = 8
+
+
+def _without_aliases(routine: Routine, aliases: dict[str, tuple[Reference, SourceLocation]],
+                     errors: list[Diagnostic]) -> Routine:
+    """The routine with every reference to an alias tag replaced by the tag it stands for."""
+
+    def ref(r: Reference, ins: Instruction, rung: int) -> Reference:
+        selectors = tuple(_selector(s, ins, rung) for s in r.selectors)
+        out = Reference(r.base, selectors)
+        for _ in range(MAX_ALIAS_CHAIN):
+            if out.base not in aliases:
+                return out
+            target = aliases[out.base][0]
+            out = Reference(target.base, target.selectors + out.selectors)
+        loc = ins.location
+        errors.append(Diagnostic(loc.file, loc.line, loc.column, f"rung {rung}: instruction {ins.position}",
+                                 f"alias tag {r.base!r} resolves through more than {MAX_ALIAS_CHAIN} aliases"))
+        return out
+
+    def _selector(s: Any, ins: Instruction, rung: int) -> Any:
+        if isinstance(s, Index):
+            return Index(tuple(operand(x, ins, rung) for x in s.subscripts))
+        if isinstance(s, IndirectBit):
+            return IndirectBit(operand(s.bit, ins, rung))
+        return s
+
+    def operand(op: Any, ins: Instruction, rung: int) -> Any:
+        if isinstance(op, Reference):
+            return ref(op, ins, rung)
+        if isinstance(op, Unary):
+            return Unary(op.op, operand(op.operand, ins, rung))
+        if isinstance(op, Binary):
+            return Binary(op.op, operand(op.left, ins, rung), operand(op.right, ins, rung))
+        return op
+
+    def element(e: Element, rung: int) -> Element:
+        if isinstance(e, Branch):
+            return Branch(tuple(tuple(element(x, rung) for x in leg) for leg in e.legs), e.location)
+        ops: tuple[Operand, ...] = tuple(operand(o, e, rung) for o in e.operands)
+        return dataclasses.replace(e, operands=ops)
+
+    rungs = tuple(dataclasses.replace(r, elements=tuple(element(e, r.number) for e in r.elements))
+                  for r in routine.rungs)
+    return dataclasses.replace(routine, rungs=rungs)

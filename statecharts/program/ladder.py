@@ -20,14 +20,14 @@ unless an array subscript or bit number is computed from a tag.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from statecharts.diagnostics import Diagnostic
 from statecharts.program.ir import (Binary, Branch, Element, Expression, Index, IndirectBit, Instruction, Member, Name,
-                                    Number, Operand, Placeholder, Program, Reference, Routine, Scalar, Unary)
-from statecharts.program.tags import INTEGER_BITS, STRUCTURES, TagDatabase, convert, to_real, wrap
+                                    Number, Operand, Program, Reference, Routine, Scalar, Unary)
+from statecharts.program.tags import INTEGER_BITS, STRUCTURES, TagDatabase, convert, wrap
 from statecharts.program.rungtext import operand_slots
 
 if TYPE_CHECKING:
@@ -142,8 +142,7 @@ class Ladder:
         self._postscans: dict[str, list[Action]] = {}
         self._returning = False
         self._prescanned: set[str] = set()
-        self._rung = 0
-        self._current: Instruction | None = None
+        self._write_slots: dict[str, tuple[int, str, int | None]] = {}
         self._set_initial_values()
 
     # -- set-up ------------------------------------------------------------------------
@@ -275,7 +274,11 @@ class Ladder:
         return v
 
     def write(self, path: str, value: Scalar) -> None:
-        slot, t, bit = self.slot(path)
+        """Write a program tag path (``START_PB``, ``Arr[3]``, ``T1.PRE``, ``Flags.2``); KeyError names a bad one."""
+        where = self._write_slots.get(path)
+        if where is None:
+            where = self._write_slots[path] = self.slot(path)
+        slot, t, bit = where
         if bit is not None:
             word = int(self.db.values[slot])
             word = word | (1 << bit) if value else word & ~(1 << bit)
@@ -497,7 +500,6 @@ class _Compiler:
                     return None
                 dims, size, name = layout.dimensions, layout.size, ref.base
                 subfs = [s for s in subs if s is not None]
-                ladder = self.ladder
                 instr = ins
                 rung = self.rung
 
@@ -508,7 +510,6 @@ class _Compiler:
                         raise ProgramFault(instr, rung, 4, 20, (
                             f"array subscript {idx} out of range for {name}{list(dims)}"))
                     return base + e2 * size
-                del ladder
                 offset = element
         member_slot = 0
         if sels and isinstance(sels[0], Member) and t in STRUCTURES:
@@ -834,9 +835,6 @@ class _Compiler:
                 out(False)
             return rci
         return osf
-
-    def _shown(self, ins: Instruction, pre: list[Action]) -> None:
-        """Immediate PRE/ACC values shown in the rung are the tag's values before the first scan (INT-P05)."""
 
     def _timer(self, ins: Instruction, kind: str, pre: list[Action]) -> Run | None:
         located = self.structure(ins, ins.operands[0], ("TIMER",))
@@ -1411,4 +1409,3 @@ _UNARY: dict[str, Callable[[Scalar], Any]] = {
     "TRN": lambda a: math.trunc(_num(a)) if isinstance(a, float) else _num(a),
 }
 
-_ = (to_real, Mapping, Sequence, Placeholder)

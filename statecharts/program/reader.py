@@ -14,8 +14,6 @@ of the file is reported in one :class:`ProgramError`, never a traceback.
 
 from __future__ import annotations
 
-import os
-import stat
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +21,7 @@ from pathlib import Path
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.program.ir import (AXIS_UNTYPED, Binary, Expression, Index, IndirectBit, Instruction, Member, Number,
-                                    Operand, Program, Reference, Routine, Scalar, SourceLocation, Tag, Unary)
+                                    Operand, Program, Reference, Routine, Scalar, Tag, Unary)
 from statecharts.program.rungtext import operand_slots, parse_rung_file
 from statecharts.program.tags import STRUCTURES
 
@@ -40,29 +38,18 @@ class ProgramError(InputError):
 
 def read_text(path: Path, max_bytes: int, what: str = "program") -> tuple[str | None, list[Diagnostic]]:
     """The file's text, or None and the reason (not a regular file, too large, not UTF-8)."""
-    name = str(path)
-    try:
-        st = os.stat(path)
-    except OSError as exc:
-        return None, [Diagnostic(name, 1, 1, "", f"cannot read {what}: {exc.strerror or exc}")]
-    if not stat.S_ISREG(st.st_mode):
-        return None, [Diagnostic(name, 1, 1, "", f"{what} is not a regular file")]
-    if st.st_size > max_bytes:
-        return None, [Diagnostic(name, 1, 1, "", (
-            f"{what} is {st.st_size:,} bytes; the limit is {max_bytes:,} bytes (pass a larger max_bytes to read it)"))]
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read(max_bytes + 1)
-    except OSError as exc:
-        return None, [Diagnostic(name, 1, 1, "", f"cannot read {what}: {exc.strerror or exc}")]
-    if len(raw) > max_bytes:
-        return None, [Diagnostic(name, 1, 1, "", f"{what} is larger than {max_bytes:,} bytes")]
+    from statecharts.inputs import read_input
+
+    errors: list[Diagnostic] = []
+    raw = read_input(path, errors, what=what, limit=max_bytes)
+    if raw is None:
+        return None, errors
     try:
         return raw.decode("utf-8-sig"), []
     except UnicodeDecodeError as exc:
         line = raw[: exc.start].count(b"\n") + 1
         col = exc.start - (raw.rfind(b"\n", 0, exc.start) + 1) + 1
-        return None, [Diagnostic(name, line, col, "", f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start})")]
+        return None, [Diagnostic(str(path), line, col, "", f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start})")]
 
 
 def load_program(path: Path | str, *, spec: spec_ir.Spec | None = None, routine: str | None = None,
@@ -368,5 +355,3 @@ def summary(program: Program) -> dict[str, object]:
         "warnings": list(program.warnings),
     }
 
-
-_ = SourceLocation

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic
-from statecharts.program.ir import (Branch, Element, Instruction, Name, Number, Operand, Placeholder, Reference, Routine,
+from statecharts.program.ir import (Branch, Element, Instruction, Name, Number, Operand, Placeholder, Routine,
                                     Rung, SourceLocation)
 from statecharts.program.logix_expr import ExpressionSyntaxError, parse_expression, parse_reference
 from statecharts.program.table import instruction_table

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate bench install deps-system deps-node lint clean
+.PHONY: check test deep generate bench install deps-system deps-node lint lint-run clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -59,8 +59,10 @@ bench: install
 	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
 	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors
 
-# Longer property-based runs than CI affords.
+# What make test leaves out: every parametrisation of the long explorations (make test
+# runs a fast sample of them), longer property-based runs, the larger checks.
 deep: install
+	@$(BIN)/python -m pytest -m deep
 	@$(BIN)/python tests/fuzzing.py --specs 10000 --scenarios 10000 --systems 1000 --properties 1000
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 	@$(BIN)/motionchart check --system cip
@@ -71,8 +73,17 @@ deep: install
 	  --vectors .deep/vectors -q --known-failures examples/adapters/node/known-failures.txt; \
 	  else echo "node not found: the JavaScript example implementation is not run"; fi
 
+# ruff (rules in pyproject.toml) and mypy --strict (statecharts/, checker/, conformance/, motionchart/); fails on
+# any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
+# sources with planted defects).
 lint: install
-	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true
+	@$(MAKE) --no-print-directory lint-run
+
+lint-run:
+	@status=0; \
+	$(BIN)/python -m ruff check --no-cache . || status=1; \
+	$(BIN)/python -m mypy || status=1; \
+	exit $$status
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis build *.egg-info .bench .deep
+	rm -rf $(VENV) .pytest_cache .hypothesis .mypy_cache .ruff_cache build *.egg-info .bench .deep

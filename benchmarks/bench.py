@@ -64,7 +64,7 @@ def reference_bfs(n: int) -> tuple[int, int]:
         succ = {s}  # a scan in which nothing changes
         for i, local in enumerate(s):
             for tgt in MOVES[local]:
-                succ.add(tuple(sorted(s[:i] + (tgt,) + s[i + 1:])))
+                succ.add(tuple(sorted((*s[:i], tgt, *s[i + 1:]))))
         transitions += len(succ)
         for t in succ:
             if t not in parent:

@@ -128,7 +128,7 @@ class CompiledModel:
         self.tags = Intern()  # tag parts (values, rung, operands, monitors)
         self.cov = CoreCoverage()
         self.tis: list[tuple[int, ...]] = [tuple(t) for t in model.tags_of_axis]
-        self.chart_of = [a.chart.id for a in model.axes]  # type: ignore[attr-defined]
+        self.chart_of = [a.chart.id for a in model.axes]
         fields = model.slots[0].fields if model.slots else ()
         self._pending_pos = fields.index("pending") if "pending" in fields else -1
         self.symmetric_groups = [list(g) for g in model.symmetric_groups]
@@ -199,18 +199,18 @@ class CompiledModel:
             self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
             cid = self.chart_of[ai]
             self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
-            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[attr-defined, call-overload]
+            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
                 self.cov.values.add((cid, v, x))
         return i
 
     def encode_flat(self, flat: Flat) -> State:
         """The core's state for an interpreter flat state (canonicalised)."""
-        out: list[int] = [flat[0]]  # type: ignore[list-item]
+        out: list[int] = [flat[0]]
         for ai in range(self.naxes):
             start = self.block_start[ai]
-            out.append(self.part_id(ai, flat[start]))  # type: ignore[arg-type]
+            out.append(self.part_id(ai, flat[start]))
             for k in range(1, self.block_len[ai]):
-                out.append(self.tag_id(flat[start + k]))  # type: ignore[arg-type]
+                out.append(self.tag_id(flat[start + k]))
         return self.canonical(out)
 
     def decode(self, state: Sequence[int]) -> Flat:
@@ -253,7 +253,7 @@ class CompiledModel:
 
     def _load_core(self, ai: int, core: int) -> Any:
         axis = self.model.axes[ai]
-        axis.restore(self.cores.values[core])  # type: ignore[attr-defined]
+        axis.restore(self.cores.values[core])
         return axis
 
     def _load_tag(self, ti: int, tid: int) -> Any:
@@ -273,7 +273,7 @@ class CompiledModel:
                             self.model.monitor_values[ti]))
 
     def _read_core(self, ai: int) -> int:
-        return self.cores.id(self.model.axes[ai].snapshot())  # type: ignore[attr-defined]
+        return self.cores.id(self.model.axes[ai].snapshot())
 
     def _begin(self, ai: int) -> None:
         """Clear the fired-transition and trace records before a piece runs."""
@@ -403,7 +403,7 @@ class CompiledModel:
         bad: list[Property] = []
         good: list[Property] = []
         model.evaluate_tag(ti, queued, {}, bad, good)
-        r = (self.tag_id(model.extract_tag(ti, queued)), tuple(bad), tuple(good))  # type: ignore[arg-type]
+        r = (self.tag_id(model.extract_tag(ti, queued)), tuple(bad), tuple(good))
         self._tag_post[ti][(tid, queued, core)] = r
         return r
 
@@ -487,7 +487,7 @@ class CompiledModel:
         if active is None or mode == PRESCAN:
             order: tuple[int, ...] = tuple(range(len(tis)))
             watch = ()
-        elif kind == RAISE or kind == DROP:
+        elif kind in (RAISE, DROP):
             order = active if k in active else tuple(sorted((*active, k)))
             if k in watch:
                 watch = tuple(x for x in watch if x != k)
@@ -504,7 +504,7 @@ class CompiledModel:
             r = self._drop[ti].get(tid)
             tags[k] = r if r is not None else self.piece_drop(ti, tid)
         elif kind == EVENT:
-            h = (*h, arg)  # type: ignore[assignment]
+            h = (*h, arg)  # type: ignore[arg-type]  # an EVENT choice's argument is its event name
         rung = self._rung
         pending = self._pending
         rows = self._rows

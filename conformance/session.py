@@ -33,7 +33,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import Errored, EnvironmentEvent, Executed, ScanInputs, System
+from statecharts.scan import EnvironmentEvent, Errored, Executed, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -186,7 +186,7 @@ class Session:
             trace: list[object] = []
             system.trace = trace  # type: ignore[assignment]
             for axis in system.axes.values():
-                axis.fired.clear()
+                axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
             system.advance(si)
             system.trace = None
             self._note(trace)
@@ -202,7 +202,7 @@ class Session:
     def _note(self, trace: list[object]) -> None:
         cov = self.covered
         for axis in self.system.axes.values():
-            cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)
+            cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)  # type: ignore[attr-defined]  # see above
         tags = self.system.tags
         for rec in trace:
             if type(rec) is Executed:

@@ -32,6 +32,7 @@ Output is deterministic: the same spec and scenarios give byte-identical files.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -323,10 +324,10 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
                       progress: Callable[[str], None] | None = None, *, explore_fn: Callable[..., Any] | None = None,
                       ) -> None:
     """Shortest runs for every item the checker covers on ``system`` (a bundled name or a file)."""
+    from checker import search
     from checker.counterexample import replay
     from checker.model import Model
     from checker.properties import load_properties
-    from checker import search
     from checker.system import bundled_systems, load_system
     path = bundled_systems().get(str(system), Path(system))
     sysdef = load_system(path, spec)
@@ -384,9 +385,9 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
     labels: list[str] = []
     for c in choices:
         entry: dict[str, Any] = {}
-        if c.kind == "raise":
+        if c.kind == "raise" and c.tag is not None:
             rungs[c.tag] = True
-        elif c.kind == "drop":
+        elif c.kind == "drop" and c.tag is not None:
             rungs[c.tag] = False
         entry["rungs"] = dict(rungs)
         if c.kind == "raise" and c.operands:
@@ -523,12 +524,10 @@ def spec_digest(spec: ir.Spec) -> str:
     h = hashlib.sha256()
     for f in sorted(spec.files):
         p = Path(f)
-        name = p.name if not p.is_absolute() else p.name
+        name = p.name
         h.update(name.encode())
-        try:
+        with contextlib.suppress(OSError):
             h.update(p.read_bytes())
-        except OSError:
-            pass
     return h.hexdigest()[:16]
 
 

@@ -265,7 +265,7 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
     if not args.score:
         print("motionchart mutate: nothing to do; give --score", file=sys.stderr)
         return EXIT_USAGE
-    from conformance import mutation  # type: ignore[attr-defined]  # the mutation score module is not in this package yet
+    from conformance import mutation
     from conformance.vectors import load_vectors
     from statecharts.loader import load_spec
     if args.vectors and _missing([args.vectors]):

@@ -32,6 +32,7 @@ import re
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -90,7 +91,7 @@ def _shifted(a: Assignment, delta: int) -> Assignment | None:
     sign = "+" if delta > 0 else "-"
     try:
         return parse_assignment(f"{a.target} = ({rhs}) {sign} {abs(delta)}")
-    except Exception:  # noqa: BLE001 - a right-hand side that cannot be shifted is not mutated
+    except Exception:
         return None
 
 
@@ -115,10 +116,12 @@ def _replace_action(spec: ir.Spec, cid: str, where: str, elem: str, i: int, new:
     def sub(actions: tuple[Assignment, ...]) -> tuple[Assignment, ...]:
         return tuple(new if k == i else a for k, a in enumerate(actions))
 
-    if where in ("entry", "exit"):
-        states = tuple(dataclasses.replace(s, **{where: sub(getattr(s, where))}) if s.id == elem else s
-                       for s in chart.states)
-        chart = dataclasses.replace(chart, states=states)
+    if where == "entry":
+        chart = dataclasses.replace(chart, states=tuple(
+            dataclasses.replace(s, entry=sub(s.entry)) if s.id == elem else s for s in chart.states))
+    elif where == "exit":
+        chart = dataclasses.replace(chart, states=tuple(
+            dataclasses.replace(s, exit=sub(s.exit)) if s.id == elem else s for s in chart.states))
     elif where == "transition":
         chart = dataclasses.replace(chart, transitions=tuple(
             dataclasses.replace(t, actions=sub(t.actions)) if t.id == elem else t for t in chart.transitions))
@@ -140,7 +143,15 @@ def _replace_table_action(spec: ir.Spec, iid: str, part: str, i: int, new: Assig
                      if r.condition == cond else r for r in table.rows)
         table = dataclasses.replace(table, rows=rows)
     else:
-        table = dataclasses.replace(table, **{part: tuple(new if k == i else a for k, a in enumerate(getattr(table, part)))})
+        new_actions = tuple(new if k == i else a for k, a in enumerate(getattr(table, part)))
+        if part == "on_execute":
+            table = dataclasses.replace(table, on_execute=new_actions)
+        elif part == "on_error":
+            table = dataclasses.replace(table, on_error=new_actions)
+        elif part == "on_accept":
+            table = dataclasses.replace(table, on_accept=new_actions)
+        else:
+            table = dataclasses.replace(table, on_done=new_actions)
     return _replace_instruction(spec, dataclasses.replace(ins, table=table))
 
 
@@ -174,33 +185,33 @@ def mutants(spec: ir.Spec, charts: Sequence[str] | None = None, instructions: Se
         for t in chart.transitions:
             if t.guard is not None:
                 out.append(Mutant(f"drop_guard {cid}:{t.id}", "drop_guard", cid, None,
-                                  lambda s, cid=cid, tid=t.id: _with_transition(s, cid, tid, guard=None)))
+                                  partial(_with_transition, cid=cid, tid=t.id, guard=None)))
             if t.target is not None and t.target in leaves and len(leaves) > 1:
                 new = leaves[(leaves.index(t.target) + 1) % len(leaves)]
                 out.append(Mutant(f"swap_target {cid}:{t.id}->{new}", "swap_target", cid, None,
-                                  lambda s, cid=cid, tid=t.id, new=new: _with_transition(s, cid, tid, target=new)))
+                                  partial(_with_transition, cid=cid, tid=t.id, target=new)))
         for where, elem, i, a in _action_sites(chart):
             flipped = _flipped(a)
             if flipped is not None:
                 out.append(Mutant(f"flip {cid}:{where}:{elem}[{i}] {a.text}", "flip_bit", cid, None,
-                                  lambda s, cid=cid, w=where, e=elem, i=i, n=flipped: _replace_action(s, cid, w, e, i, n)))
+                                  partial(_replace_action, cid=cid, where=where, elem=elem, i=i, new=flipped)))
             for delta in (1, -1):
                 shifted = _shifted(a, delta)
                 if shifted is not None:
                     out.append(Mutant(f"timer {cid}:{where}:{elem}[{i}] {a.text} {delta:+d}", "timer", cid, None,
-                                      lambda s, cid=cid, w=where, e=elem, i=i, n=shifted: _replace_action(s, cid, w, e, i, n)))
+                                      partial(_replace_action, cid=cid, where=where, elem=elem, i=i, new=shifted)))
     for ins in use_ins:
         iid = ins.id
-        for c in (*ins.checks, *ins.aborts):
-            out.append(Mutant(f"err {iid}.{c.id} {c.err}->{c.err + 1}", "error_code", None, iid,
-                              lambda s, iid=iid, cid=c.id, v=c.err + 1: _with_check(s, iid, cid, err=v)))
-            if c.exerr:
-                out.append(Mutant(f"exerr {iid}.{c.id} {c.exerr}->{c.exerr + 1}", "exerr", None, iid,
-                                  lambda s, iid=iid, cid=c.id, v=c.exerr + 1: _with_check(s, iid, cid, exerr=v)))
+        for chk in (*ins.checks, *ins.aborts):
+            out.append(Mutant(f"err {iid}.{chk.id} {chk.err}->{chk.err + 1}", "error_code", None, iid,
+                              partial(_with_check, iid=iid, cid=chk.id, err=chk.err + 1)))
+            if chk.exerr:
+                out.append(Mutant(f"exerr {iid}.{chk.id} {chk.exerr}->{chk.exerr + 1}", "exerr", None, iid,
+                                  partial(_with_check, iid=iid, cid=chk.id, exerr=chk.exerr + 1)))
         for k in range(len(ins.checks) - 1):
-            a, b = ins.checks[k], ins.checks[k + 1]
-            out.append(Mutant(f"reorder {iid}.{a.id}<->{b.id}", "reorder", None, iid,
-                              lambda s, iid=iid, k=k: _swap_checks(s, iid, k)))
+            first, second = ins.checks[k], ins.checks[k + 1]
+            out.append(Mutant(f"reorder {iid}.{first.id}<->{second.id}", "reorder", None, iid,
+                              partial(_swap_checks, iid=iid, k=k)))
         table = ins.table
         parts: list[tuple[str, tuple[Assignment, ...]]] = [(p, getattr(table, p)) for p in TABLE_PARTS]
         parts += [(f"row:{r.condition}", r.actions) for r in table.rows]
@@ -209,7 +220,7 @@ def mutants(spec: ir.Spec, charts: Sequence[str] | None = None, instructions: Se
                 flipped = _flipped(a)
                 if flipped is not None:
                     out.append(Mutant(f"flip {iid}:{part}[{i}] {a.text}", "flip_bit", None, iid,
-                                      lambda s, iid=iid, p=part, i=i, n=flipped: _replace_table_action(s, iid, p, i, n)))
+                                      partial(_replace_table_action, iid=iid, part=part, i=i, new=flipped)))
     return out
 
 
@@ -288,12 +299,12 @@ def load_equivalents(path: Path = EQUIVALENTS_FILE) -> dict[str, str]:
     if not path.is_file():
         return {}
     from statecharts.diagnostics import Diagnostic, InputError
-    from statecharts.loader import _plain, read_yaml
+    from statecharts.loader import plain_data, read_yaml
     errors: list[Diagnostic] = []
     tree = read_yaml(path, errors, what="equivalent mutants")
     if errors:
         raise InputError(errors)
-    doc = _plain(tree) if tree is not None else {}
+    doc = plain_data(tree) if tree is not None else {}
     out: dict[str, str] = {}
     for entry in doc.get("equivalent", []):
         out[str(entry["mutant"])] = " ".join(str(entry["reason"]).split())
@@ -412,8 +423,10 @@ def score(spec: ir.Spec, vectors: Sequence[Mapping[str, Any]], *, sample_size: i
         killed = [r for r in results if r.killed and " expected " in r.detail][:subprocess_sample]
         for r in killed:
             cmd = f"{sys.executable} -m checker adapter --mutant {_quote(r.mutant.id)}"
-            again = try_mutant(r.mutant, spec, [v for v in vectors if v["id"] == r.by],
-                               lambda _s, cmd=cmd: ProcessTransport(cmd))
+            def child(_spec: ir.Spec, cmd: str = cmd) -> Any:
+                return ProcessTransport(cmd)
+
+            again = try_mutant(r.mutant, spec, [v for v in vectors if v["id"] == r.by], child)
             results.append(MutantResult(r.mutant, again.killed, again.by, again.detail, via="subprocess"))
             if progress:
                 progress(f"subprocess: {r.mutant.id}: {'killed' if again.killed else 'NOT killed'}")

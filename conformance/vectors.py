@@ -425,7 +425,7 @@ def _order_vectors(spec: ir.Spec, model: Any, result: Any, suite: Suite, sysdef:
             item = order_item(ins, k)
             if observable_order(ins, k) and item not in covered:
                 wanted[item] = (ins, k)
-    tries = {item: 0 for item in wanted}
+    tries = dict.fromkeys(wanted, 0)
     searched = set(wanted)
     made = 0
     for i in range(result.states):
@@ -448,7 +448,7 @@ def _order_vectors(spec: ir.Spec, model: Any, result: Any, suite: Suite, sysdef:
                 a, b = ins.checks[k], ins.checks[k + 1]
                 try:
                     both = bool(a.fails_when(env)) and bool(b.fails_when(env))
-                except Exception:  # noqa: BLE001 - a condition that cannot be evaluated here is no candidate
+                except Exception:
                     both = False
                 if not both:
                     continue

@@ -83,6 +83,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
     a = sub.add_parser("adapter", help="serve the project's engine over the conformance protocol on stdin/stdout")
     a.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
+    a.add_argument("--mutant", metavar="ID", help="serve this mutant of the spec (ids as `mutate --score --json` lists them)")
 
     m = sub.add_parser("mutate", help="mutation score of the conformance suite",
                        description="Build mutants of the spec (dropped guards, swapped targets, changed codes and "
@@ -250,6 +251,13 @@ def _adapter(args: argparse.Namespace) -> int:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return EXIT_FAIL
+    if args.mutant:
+        from conformance.mutation import find
+        try:
+            spec = find(spec, args.mutant).build(spec)
+        except KeyError:
+            print(f"motionchart adapter: no mutant {args.mutant!r}", file=sys.stderr)
+            return EXIT_USAGE
     return serve(spec)
 
 
@@ -257,7 +265,7 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
     if not args.score:
         print("motionchart mutate: nothing to do; give --score", file=sys.stderr)
         return EXIT_USAGE
-    from conformance import mutation  # type: ignore[attr-defined]  # the mutation score module is not in this package yet
+    from conformance import mutation
     from conformance.vectors import load_vectors
     from statecharts.loader import load_spec
     if args.vectors and _missing([args.vectors]):
@@ -272,7 +280,15 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
             print(d, file=sys.stderr)
         return EXIT_FAIL
     progress = None if (args.quiet or args.json) else (lambda msg: print(f"mutate: {msg}", file=sys.stderr, flush=True))
-    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress)
+    explained: dict[str, str] = {}
+    manifest = directory / "manifest.json" if directory.is_dir() else None
+    if manifest is not None and manifest.is_file():
+        try:
+            explained = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]["orders"]["explained"]
+        except (ValueError, KeyError, TypeError):
+            explained = {}
+    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
+                           explained_orders=explained)
     if args.json:
         json.dump(score.as_dict(), out, indent=2, sort_keys=True, default=str)
         out.write("\n")

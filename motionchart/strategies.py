@@ -44,6 +44,7 @@ __all__ = [
     "SCAN_TIMINGS",
     "AxisSetup",
     "axis_setups",
+    "checking_systems",
     "environment_event_names",
     "environment_events",
     "fault_injections",
@@ -395,3 +396,47 @@ def mutated_specs(
     if not mutants:
         raise ValueError("the spec has no mutants of the requested kinds")
     return st.sampled_from(mutants)
+# --------------------------------------------------------------------------- checking systems
+
+
+def checking_systems(spec: ir.Spec, base: Any) -> st.SearchStrategy[Any]:
+    """Small model-checking systems (:class:`checker.system.SystemDef`) varied from ``base``:
+    an axis chart and type, one or two interchangeable axes, a start state and set-up
+    variables, up to three instruction calls, up to three environment events, the
+    scan timing, the live-call bound, prescan passes and the abstractions."""
+    import dataclasses
+
+    from checker.system import AxisGroup, Configuration
+
+    charts = [c for c in spec.charts if instructions_for(spec, c)]
+
+    @st.composite
+    def build(draw: st.DrawFn) -> Any:
+        chart = draw(st.sampled_from(charts))
+        setup = draw(axis_setups(chart, "Axis"))
+        ids = [i.id for i in instructions_for(spec, chart)]
+        program = draw(st.lists(st.sampled_from(ids), min_size=1, max_size=3, unique=True))
+        events = [e.name for e in chart.events if e.kind == "environment"]
+        env = draw(st.lists(st.sampled_from(events), max_size=3, unique=True)) if events else []
+        scan_ms, cu_ms = draw(scan_timings())
+        variables = dict(setup.variables)
+        if "AxisType" in {v.name for v in chart.variables}:
+            variables["AxisType"] = setup.axis_type
+        group = AxisGroup(name="Axis", axis_type=setup.axis_type, chart=chart.id,
+                          count=draw(st.integers(1, 2)), state=setup.state,
+                          variables=tuple(sorted(variables.items())),
+                          configurations=(Configuration("drawn", (), ""),), program=tuple(program))
+        # every operand of a call takes its first documented value or two
+        domains = []
+        for m in program:
+            ins = spec.instruction(m)
+            for op in value_operands(ins):
+                if op.domain is not None:
+                    domains.append((ins.id, op.name, tuple(op.domain[:2])))
+        return dataclasses.replace(
+            base, name="drawn", groups=(group,), scan_ms=scan_ms, coarse_update_ms=cu_ms,
+            operand_domains=tuple(domains), environment=tuple(env), prescan=draw(st.booleans()),
+            max_live_calls=draw(st.sampled_from([1, 2, None])), collapse=(),
+            symmetry=draw(st.booleans()), retire_idle_tags=draw(st.booleans()))
+
+    return build()

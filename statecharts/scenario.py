@@ -390,6 +390,10 @@ def _expectation_problem(spec: ir.Spec, chart: ir.Chart | None, field: str, valu
         var = chart.variable(field)
     except KeyError:
         return None
+    if var.type == "int":
+        # an observation may lie outside the declared domain (a faulty spec or another
+        # implementation produces it); an expectation is checked against the type only
+        return value_problem("int", None, value) or _integer_problem("DINT", value)
     return value_problem(var.type, var.domain, value)
 
 
@@ -426,6 +430,15 @@ def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: i
     return load_program_scenario(path, tree, doc, spec, err, errors, base)
 
 
+def _domain_text(domain: Sequence[object]) -> str:
+    """A domain as a reader wants it: a contiguous integer range as ``[lo..hi]``."""
+    values = list(domain)
+    ints = [v for v in values if isinstance(v, int) and not isinstance(v, bool)]
+    if len(ints) == len(values) > 8 and ints == list(range(ints[0], ints[-1] + 1)):
+        return f"[{ints[0]}..{ints[-1]}]"
+    return repr(values)
+
+
 def value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
     """Why ``value`` cannot be given to a variable of ``vtype``, or None."""
     if vtype == "bool":
@@ -435,7 +448,7 @@ def value_problem(vtype: str, domain: Sequence[object] | None, value: object) ->
     if vtype == "real" and (isinstance(value, bool) or not isinstance(value, (int, float))):
         return f"expected a number, got {value!r}"
     if domain is not None and value not in domain:
-        return f"{value!r} is not in the domain {list(domain)!r}"
+        return f"{value!r} is not in the domain {_domain_text(domain)}"
     return None
 
 

@@ -41,7 +41,7 @@ from ruamel.yaml import YAML
 from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 
-from statecharts import ir
+from statecharts import ir, sources
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression
 
@@ -1034,9 +1034,20 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     b = _Builder()
     files: list[_File] = []
     failed_files = 0
-    for path in spec_files(paths):
-        # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files
-        if path.suffix == ".json" or path.parent.name in ("schema", "systems", "properties"):
+    all_paths = spec_files(paths)
+    registry, source_errors = sources.registry_for(all_paths)
+    cited_trees: list[tuple[str, Any]] = []
+    for path in all_paths:
+        # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files,
+        # read here only for their citations (their own loaders report everything else)
+        if path.suffix == ".json":
+            continue
+        if path.parent.name in ("schema", "systems", "properties") or path.parent.parent.name == "systems":
+            if registry is not None and path.parent.name != "schema":
+                side = read_yaml(path, [])
+                if side is not None:
+                    source_errors.extend(sources.tree_source_diagnostics(str(path), side, registry))
+                    cited_trees.append((str(path), side))
             continue
         before = len(b.errors)
         tree = read_yaml(path, b.errors)
@@ -1045,6 +1056,9 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 b.errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
             failed_files += 1
             continue
+        if registry is not None:
+            source_errors.extend(sources.tree_source_diagnostics(str(path), tree, registry))
+            cited_trees.append((str(path), tree))
         if _other_format(tree):
             # properties, systems... live beside the spec and have their own loaders; an
             # interpretation they cite still counts as used
@@ -1159,6 +1173,14 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
         b.used_interpretations.add(interp_id)
         if interp_id not in interp_where and complete:
             b.error(f, parts, f"unknown interpretation {interp_id!r}; add it to interpretations.yaml")
+    for name, tree in cited_trees:
+        for parts, interp_id in sources.interpretation_citations(tree):
+            b.used_interpretations.add(interp_id)
+            if interp_id not in interp_where and complete:
+                line, col = locate(tree, parts)
+                b.errors.append(Diagnostic(name, line, col, node_path(parts), (
+                    f"the source cites unknown interpretation {interp_id!r}; add it to interpretations.yaml")))
+    b.errors.extend(source_errors)
     if complete:
         for interp_id, (f, parts) in interp_where.items():
             if interp_id not in b.used_interpretations:

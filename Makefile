@@ -32,7 +32,7 @@ deps-system:
 
 check: install
 	@$(BIN)/motionchart validate
-	@$(BIN)/motionchart simulate --summary scenarios
+	@$(BIN)/motionchart simulate --summary scenarios examples/programs
 	@$(BIN)/motionchart check
 	@$(BIN)/motionchart check --system aoi
 
@@ -50,6 +50,7 @@ bench: install
 
 # Longer property-based runs than CI affords.
 deep: install
+	@$(BIN)/python tests/fuzzing.py --specs 10000 --scenarios 10000 --systems 1000 --properties 1000
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3

@@ -134,4 +134,8 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    code = main()
+    # the ladder interpreter's figures, a separate section (benchmarks/ladder_bench.py)
+    from benchmarks.ladder_bench import ladder_benchmark
+    ladder_benchmark()
+    raise SystemExit(code)

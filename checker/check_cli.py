@@ -41,6 +41,17 @@ def _positive_float(text: str) -> float:
     return value
 
 
+#: Most axes ``--axes`` may put in a group (each axis multiplies the state space).
+MAX_AXES = 64
+
+
+def _axis_count(text: str) -> int:
+    value = _positive_int(text)
+    if value > MAX_AXES:
+        raise argparse.ArgumentTypeError(f"at most {MAX_AXES} axes per group, got {value}")
+    return value
+
+
 def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
     p = subparsers.add_parser(
         "check", help="model-check a system: properties, counterexamples, coverage",
@@ -49,7 +60,7 @@ def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--system", default=DEFAULT_SYSTEM, metavar="NAME",
                    help=f"a bundled system name or a system file (default: {DEFAULT_SYSTEM}; --list-systems lists them)")
     p.add_argument("--list-systems", action="store_true", help="list the bundled systems and exit")
-    p.add_argument("--axes", type=_positive_int, metavar="N", help="use N axes in every axis group of the system")
+    p.add_argument("--axes", type=_axis_count, metavar="N", help="use N axes in every axis group of the system")
     p.add_argument("--max-changes", type=_positive_int, metavar="N",
                    help="add-on instruction systems: allow N input/environment changes per run (default: the system's)")
     p.add_argument("--max-states", type=_positive_int, metavar="N", help="stop (incomplete) after N states")
@@ -78,12 +89,16 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
     from checker.report import build_report, text
     from checker.search import explore
     from checker.system import bundled_systems, load_system
+    from checker.compile import DivergenceError
+    from statecharts.expr import EvalError
+    from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
     from statecharts.loader import load_spec
 
     for opt in ("properties", "spec"):
         for p in getattr(args, opt) or []:
-            if not p or not Path(p).exists():
-                print(f"motionchart check: no such file or directory: {p!r}", file=sys.stderr)
+            problem = path_argument_problem(p)
+            if problem is not None:
+                print(f"motionchart check: {problem}: {shown_name(p)!r}", file=sys.stderr)
                 return EXIT_USAGE
     from checker.aoi_check import bundled_aoi_systems
     systems = {**bundled_systems(), **bundled_aoi_systems()}
@@ -93,7 +108,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         return EXIT_OK
     if args.system in systems:
         system_path = systems[args.system]
-    elif Path(args.system).is_file():
+    elif path_argument_problem(args.system) is None and Path(args.system).is_file():
         system_path = Path(args.system)
     else:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
@@ -124,17 +139,56 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return EXIT_VIOLATED
+    except (EvalError, DivergenceError, ArithmeticError, RecursionError) as exc:
+        _cannot_explore(exc, props if "props" in locals() else (), spec)
+        return EXIT_VIOLATED
     progress = False if (args.quiet or args.json) else None
-    result = explore(model, max_states=args.max_states, max_seconds=args.max_seconds,
-                     keep_graph=args.graphml is not None, progress=progress)
-    report = build_report(result, counterexamples=Path(args.counterexamples) if args.counterexamples else None,
-                          graphml=Path(args.graphml) if args.graphml else None)
+    for opt, path in (("--graphml", args.graphml), ("--counterexamples", args.counterexamples)):
+        problem = output_path_problem(path, directory=opt == "--counterexamples") if path is not None else None
+        if problem is not None:
+            print(f"motionchart check: {opt} {shown_name(path)!r}: {problem}", file=sys.stderr)
+            return EXIT_USAGE
+    try:
+        result = explore(model, max_states=args.max_states, max_seconds=args.max_seconds,
+                         keep_graph=args.graphml is not None, progress=progress)
+    except (EvalError, DivergenceError, ArithmeticError, RecursionError) as exc:
+        _cannot_explore(exc, props, spec)
+        return EXIT_VIOLATED
+    try:
+        report = build_report(result, counterexamples=Path(args.counterexamples) if args.counterexamples else None,
+                              graphml=Path(args.graphml) if args.graphml else None)
+    except OSError as exc:
+        print(f"motionchart check: cannot write {shown_name(exc.filename or '')}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_VIOLATED
     if args.json:
         json.dump(report.as_dict(), out, indent=2, sort_keys=True, default=str)
         out.write("\n")
     else:
         out.write(text(report))
     return report.exit_code
+
+
+def _cannot_explore(exc: BaseException, props: object, spec: object) -> None:
+    where = _expression_site(props, spec, getattr(exc, "text", ""))
+    print(f"{where or 'motionchart check: '}the system cannot be explored: {exc}", file=sys.stderr)
+
+
+def _expression_site(props: object, spec: object, text: str) -> str:
+    """``file:line: `` of the property or chart element whose expression is ``text``."""
+    if not text:
+        return ""
+    for p in props:  # type: ignore[attr-defined]
+        for key in ("where", "holds", "goal", "trigger", "response", "unless"):
+            e = getattr(p, key, None)
+            if e is not None and e.text == text:
+                return f"{p.file}:{p.line}: property {p.name}: "
+    for c in spec.charts:  # type: ignore[attr-defined]
+        for t in c.transitions:
+            texts = [t.guard.text] if t.guard is not None else []
+            texts += [a.value.text for a in t.actions] + [a.text for a in t.actions]
+            if text in texts:
+                return f"{t.location.file}:{t.location.line}:{t.location.column}: transition {t.id}: "
+    return ""
 
 
 def main(argv: list[str] | None = None) -> int:

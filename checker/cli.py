@@ -21,9 +21,11 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from checker import check_cli, render_cli
+from conformance import cli as conformance_cli
+from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.loader import load_spec
-from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scenario_files
+from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scan_label, scenario_files
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -50,8 +52,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"motionchart {_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    v = sub.add_parser("validate", help="check spec files (default: the bundled spec)")
-    v.add_argument("paths", nargs="*", metavar="PATH", help="spec files or directories")
+    v = sub.add_parser("validate", help="check spec files (default: the bundled spec), or ladder program files")
+    v.add_argument("paths", nargs="*", metavar="PATH",
+                   help="spec files or directories; or program files (.rll/.txt rung text, .L5X exports)")
     v.add_argument("--json", action="store_true", help="print one JSON object")
 
     s = sub.add_parser("simulate", help="run scenarios on the engine and check their expectations")
@@ -63,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     check_cli.register(sub)
     render_cli.register(sub)
+    conformance_cli.register(sub)
     return parser
 
 
@@ -78,14 +82,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
     try:
-        if args.command == "validate":
-            return _validate(args, sys.stdout)
-        if args.command == "simulate":
-            return _simulate(args, sys.stdout)
-        for extension in (check_cli, render_cli):
-            code = extension.dispatch(args)
-            if code is not None:
-                return code
+        code = _run_command(args)
+        sys.stdout.flush()
+        return code
     except InputError as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
@@ -98,6 +97,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("motionchart: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        # output that cannot be written (a full disk, /dev/full, a path under a file)
+        target = f" {shown_name(exc.filename)}" if getattr(exc, "filename", None) else " the output"
+        print(f"motionchart {args.command}: cannot write{target}: {exc.strerror or exc}", file=sys.stderr)
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_FAIL
+
+
+def _run_command(args: argparse.Namespace) -> int:
+    if args.command == "validate":
+        return _validate(args, sys.stdout)
+    if args.command == "simulate":
+        return _simulate(args, sys.stdout)
+    for extension in (check_cli, render_cli, conformance_cli):
+        code = extension.dispatch(args)
+        if code is not None:
+            return code
     return EXIT_USAGE
 
 
@@ -111,7 +128,14 @@ def _tolerant_streams() -> None:
 
 def _missing(paths: Sequence[str]) -> list[str]:
     # an empty argument would name the current directory and load everything under it
-    return [repr(p) if not p else p for p in paths if not p or not Path(p).exists()]
+    out = []
+    for p in paths:
+        problem = path_argument_problem(p)
+        if problem is None:
+            continue
+        name = repr(p) if not p else shown_name(p)
+        out.append(name if problem == "no such file or directory" else f"{name} ({problem})")
+    return out
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
@@ -127,6 +151,8 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
     if missing:
         print(f"motionchart validate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
         return EXIT_USAGE
+    if args.paths and all(_is_program_file(p) for p in args.paths):
+        return _validate_programs(args, out)
     problems: list[Diagnostic] = []
     spec = None
     try:
@@ -179,6 +205,54 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
     return EXIT_OK
 
 
+def _is_program_file(path: str) -> bool:
+    from statecharts.program.reader import RUNG_SUFFIXES
+    return Path(path).is_file() and Path(path).suffix.lower() in (*RUNG_SUFFIXES, ".l5x")
+
+
+def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
+    """``validate PROGRAM...``: read each program and print what it holds (docs/programs.md)."""
+    from statecharts.program.reader import load_program, probe_compile, summary
+
+    spec = load_spec()
+    results: list[dict[str, object]] = []
+    problems: list[Diagnostic] = []
+    for path in args.paths:
+        try:
+            program = load_program(path, spec=spec)
+            probe_compile(program, spec)
+        except InputError as exc:
+            problems.extend(exc.diagnostics)
+            continue
+        results.append(summary(program))
+    if args.json:
+        json.dump({"valid": not problems, "programs": results, "errors": [str(d) for d in problems],
+                   "diagnostics": [d.as_dict() for d in problems]}, out, indent=2, sort_keys=True)
+        out.write("\n")
+    else:
+        for r in results:
+            routines = r["routines"]
+            assert isinstance(routines, dict)
+            out.write(f"program {r['program']} ({r['file']}, {r['form']}): {len(routines)} routine(s), "
+                      f"{r['rungs']} rungs, {r['tags']} tags\n")
+            out.write("  routines: " + ", ".join(f"{n} ({k} rungs{', main' if n == r['main_routine'] else ''})"
+                                                 for n, k in routines.items()) + "\n")
+            axes = r["axes"]
+            assert isinstance(axes, dict)
+            if axes:
+                out.write("  axes: " + ", ".join(f"{n} ({t})" for n, t in axes.items()) + "\n")
+            used = r["instructions"]
+            assert isinstance(used, dict)
+            out.write("  instructions: " + ", ".join(f"{m} x{k}" for m, k in used.items()) + "\n")
+            for w in r["warnings"]:  # type: ignore[attr-defined]
+                out.write(f"  note: {w}\n")
+    for d in problems:
+        print(d, file=sys.stderr)
+    if problems:
+        print(f"{len(problems)} error(s)", file=sys.stderr)
+    return EXIT_FAIL if problems else EXIT_OK
+
+
 def _aoi_line(docs: Sequence[Any]) -> str:
     """``add-on instructions: 1 (17 checks, 21 codes, 8 recovery states, 9 transitions), 5 sub-instructions``."""
     checks = sum(len(d.checks) for d in docs)
@@ -191,13 +265,21 @@ def _aoi_line(docs: Sequence[Any]) -> str:
 
 
 def _print_table(result: ScenarioResult, out: TextIO) -> None:
-    out.write(f"scenario: {result.scenario.name}  ({result.scenario.file})\n")
-    out.write(f"{'scan':>5}  {'step':<28}  changes\n")
+    _print_header(result.scenario, out)
     for row in result.rows:
-        label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
-        changes = "  ".join(f"{o}.{f}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
-        cu = "" if row.record.coarse_update else " (no coarse update)"
-        out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
+        _print_row(row, out)
+
+
+def _print_header(scenario: Any, out: TextIO) -> None:
+    out.write(f"scenario: {scenario.name}  ({scenario.file})\n")
+    out.write(f"{'scan':>5}  {'step':<28}  changes\n")
+
+
+def _print_row(row: Any, out: TextIO) -> None:
+    label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
+    changes = "  ".join(f"{scan_label(o, f)}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
+    cu = "" if row.record.coarse_update else " (no coarse update)"
+    out.write(f"{row.record.index:>5}  {label[:28]:<28}  {changes}{cu}\n")
 
 
 def _result_json(result: ScenarioResult) -> dict[str, object]:
@@ -210,7 +292,7 @@ def _result_json(result: ScenarioResult) -> dict[str, object]:
                 "scan": r.record.index,
                 "step": r.step + 1,
                 "coarse_update": r.record.coarse_update,
-                "changes": {f"{o}.{f}": a for o, f, _b, a in r.changes},
+                "changes": {scan_label(o, f): a for o, f, _b, a in r.changes},
             }
             for r in result.rows
         ],
@@ -245,9 +327,14 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
     results: list[ScenarioResult] = []
     input_errors: list[str] = []
     for f in files:
+        streaming = not (args.json or args.quiet or args.summary)
         try:
             scenario = load_scenario(f, spec)
-            result = run_scenario(scenario, spec)
+            if streaming:
+                _print_header(scenario, out)
+            # the table is printed as the scans run; only --json needs the rows afterwards
+            result = run_scenario(scenario, spec, on_row=(lambda row: _print_row(row, out)) if streaming else None,
+                                  keep_rows=bool(args.json))
         except InputError as exc:
             input_errors.extend(str(d) for d in exc.diagnostics)
             for d in exc.diagnostics:
@@ -257,10 +344,8 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
         if args.summary and result.passed:
             continue
         if not args.json:
-            if not (args.quiet or args.summary):
-                _print_table(result, out)
             verdict = "PASS" if result.passed else "FAIL"
-            out.write(f"{verdict} {scenario.name} ({len(result.rows)} scans)\n")
+            out.write(f"{verdict} {scenario.name} ({result.scans} scans)\n")
             for m in result.mismatches:
                 out.write(f"  {m.located(scenario.file)}\n")
             if not (args.quiet or args.summary):

@@ -435,12 +435,14 @@ class FastAxis:
         self.config = self.c.intern(frozenset(states))
 
     def _eventless(self) -> None:
+        chosen: tuple[CompiledTransition, ...] = ()
         for _ in range(MAX_EVENTLESS_STEPS):
             chosen = self._select(None)
             if not chosen:
                 return
             self._microstep(chosen)
+        where = ", ".join(f"{t.id!r} ({self.chart.transitions[t.index].location})" for t in chosen)
         raise DivergenceError(
             f"axis {self.name}: eventless transitions still enabled after {MAX_EVENTLESS_STEPS} microsteps "
-            f"in {sorted(self.config)} (an eventless loop in chart {self.chart.id})"
+            f"in {sorted(self.config)} (an eventless loop in chart {self.chart.id}; last taken: {where})"
         )

@@ -25,6 +25,7 @@ from checker.model import Choice
 from checker.properties import Property
 from checker.search import SearchResult, Witness
 from statecharts.scenario import SCENARIO_FORMAT, scan_cell
+from statecharts.outputs import atomic_write_text
 
 
 class ReplayError(RuntimeError):
@@ -179,7 +180,7 @@ def scenario_text(result: SearchResult, trace: Trace, prop: Property | None) -> 
 def write_scenario(result: SearchResult, trace: Trace, prop: Property | None, directory: Path) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / f"{result.model.sysdef.name}-{trace.prop}.yaml"
-    path.write_text(scenario_text(result, trace, prop), encoding="utf-8")
+    atomic_write_text(path, scenario_text(result, trace, prop))
     return path
 
 

@@ -79,6 +79,7 @@ class StepFacts:
     fired: tuple[tuple[str, str], ...]  # (chart, transition id)
     executed: tuple[tuple[str, str], ...]  # (instruction, axis leaf state)
     errors: tuple[tuple[str, int, int], ...]  # (instruction, ERR, EXERR)
+    checks: tuple[tuple[str, str], ...] = ()  # (instruction, id of the check or abort that failed)
 
 
 class ModelError(ValueError):
@@ -399,8 +400,7 @@ class Model:
         slots = self.slots
         for ai, axis in enumerate(self.axes):
             snap = axis.snapshot()  # type: ignore[attr-defined]
-            collapse = self.collapse_index[axis.chart.id]  # type: ignore[attr-defined]
-            values = tuple([collapse.get(i, v) for i, v in enumerate(snap[1])]) if collapse else snap[1]
+            values = self.extract_axis_values(ai, snap[1])  # type: ignore[arg-type]
             q = tuple([self.queue_local[n] for n in queue if self.tag_axis[n] == ai]) if queue else ()
             h = tuple([e.event for e in held if e.axis == axis.name]) if held else ()
             if len(snap) > 2:
@@ -408,20 +408,27 @@ class Model:
             else:
                 flat.append((snap[0], values, q, h))
             for ti in self.tags_of_axis[ai]:
-                s = slots[ti]
-                tag = s.tag
-                vals = tag.values
-                queued = tag.name in queue if queue else False
-                busy = vals.get("pending") or queued
-                if s.retire and not tag.rung and not busy and (s.rise_guard is None or s.rise_guard(vals)):
-                    flat.append(s.retired)
-                else:
-                    # operands are dead when nothing is pending and the rung is low: the
-                    # next execution needs a rise, and a rise sets every operand
-                    flat.append((tuple(vals.values()), tag.rung,
-                                 tuple(tag.operands.values()) if busy or tag.rung else s.default_ops,
-                                 self.monitor_values[ti]))
+                flat.append(self.extract_tag(ti, slots[ti].tag.name in queue if queue else False))
         return tuple(flat)
+
+    def extract_axis_values(self, ai: int, values: tuple[object, ...]) -> tuple[object, ...]:
+        """An axis's chart variable values with the collapsed ones replaced by their initial values."""
+        collapse = self.collapse_index[self.axes[ai].chart.id]  # type: ignore[attr-defined]
+        return tuple([collapse.get(i, v) for i, v in enumerate(values)]) if collapse else values
+
+    def extract_tag(self, ti: int, queued: bool) -> tuple[object, ...]:
+        """The abstract part of tag ``ti`` as loaded (dead operands reset, idle tags retired)."""
+        s = self.slots[ti]
+        tag = s.tag
+        vals = tag.values
+        busy = vals.get("pending") or queued
+        if s.retire and not tag.rung and not busy and (s.rise_guard is None or s.rise_guard(vals)):
+            return s.retired
+        # operands are dead when nothing is pending and the rung is low: the next
+        # execution needs a rise, and a rise sets every operand
+        return (tuple(vals.values()), tag.rung,
+                tuple(tag.operands.values()) if busy or tag.rung else s.default_ops,
+                self.monitor_values[ti])
 
     def load(self, flat: Flat) -> None:
         """Make the model's system be in abstract state ``flat``."""
@@ -524,12 +531,15 @@ class Model:
         fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)  # type: ignore[attr-defined]
         executed: list[tuple[str, str]] = []
         errors: list[tuple[str, int, int]] = []
+        checks: list[tuple[str, str]] = []
         for rec in self.trace:
             if type(rec) is Executed:
                 executed.append((self.system.tags[rec.tag].instruction.id, rec.axis_state))
             elif type(rec) is Errored:
-                errors.append((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
-        return StepFacts(fired, tuple(executed), tuple(errors))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                errors.append((mnemonic, rec.err, rec.exerr))
+                checks.append((mnemonic, rec.check))
+        return StepFacts(fired, tuple(executed), tuple(errors), tuple(checks))
 
     # -- properties ---------------------------------------------------------------------
 
@@ -543,13 +553,13 @@ class Model:
         env[axis.chart.state_attribute] = leaf.value  # type: ignore[attr-defined]
         return env
 
-    def tag_env(self, ti: int, axis_env: dict[str, object] | None) -> dict[str, object]:
+    def tag_env(self, ti: int, axis_env: dict[str, object] | None, queued: bool | None = None) -> dict[str, object]:
         s = self.slots[ti]
         tag = s.tag
         env: dict[str, object] = dict(axis_env) if axis_env else {}
         env.update(tag.values)
         env["rung"] = tag.rung
-        env["queued"] = tag.name in self.system.queue
+        env["queued"] = tag.name in self.system.queue if queued is None else queued
         env["instruction"] = tag.instruction.id
         env["tag"] = tag.name
         return env
@@ -558,63 +568,73 @@ class Model:
         """Invariants violated, goals reached; updates the response monitors."""
         violated: list[Property] = []
         reached: list[Property] = []
-        for ai, axis in enumerate(self.axes):
-            inv, reach = self.axis_props[ai]
-            if not inv and not reach:
-                continue
-            key = axis.snapshot()  # type: ignore[attr-defined]
-            memo = self._axis_memo.get(key)
-            if memo is None:
-                env = self.axis_env(ai)
-                memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
-                self._axis_memo[key] = memo
-            for p, ok in zip(inv, memo[0]):
-                if not ok:
-                    violated.append(p)
-            for p, ok in zip(reach, memo[1]):
-                if ok:
-                    reached.append(p)
+        for ai in range(len(self.axes)):
+            self.evaluate_axis(ai, violated, reached)
         axis_envs: dict[int, dict[str, object]] = {}
         queue = self.system.queue
-        for ti, s in enumerate(self.slots):
-            if not s.inv and not s.reach and not s.monitors:
-                continue
-            tag = s.tag
-            key: tuple[object, ...] = (ti, tuple(tag.values.values()), tag.rung, tag.name in queue,
-                                       self.monitor_values[ti])
-            if s.reads_axis:
-                key = (*key, self.axes[s.axis_index].snapshot())  # type: ignore[attr-defined]
-            memo2 = self._tag_memo.get(key)
-            if memo2 is None:
-                aenv = None
-                if s.reads_axis:
-                    aenv = axis_envs.get(s.axis_index)
-                    if aenv is None:
-                        aenv = self.axes[s.axis_index].expression_env()  # type: ignore[attr-defined]
-                        axis_envs[s.axis_index] = aenv
-                env = self.tag_env(ti, aenv)
-                inv_ok = tuple(_holds(p, env, p.holds) for p in s.inv)
-                goals = tuple(_holds(p, env, p.goal) for p in s.reach)
-                mons: list[int] = []
-                bad: list[bool] = []
-                for p, m in zip(s.monitors, self.monitor_values[ti]):
-                    m2, b = _monitor(p, env, m)
-                    mons.append(m2)
-                    bad.append(b)
-                memo2 = (inv_ok, goals, tuple(mons), tuple(bad))
-                self._tag_memo[key] = memo2
-            for p, ok in zip(s.inv, memo2[0]):
-                if not ok:
-                    violated.append(p)
-            for p, ok in zip(s.reach, memo2[1]):
-                if ok:
-                    reached.append(p)
-            if s.monitors:
-                self.monitor_values[ti] = memo2[2]
-                for p, b in zip(s.monitors, memo2[3]):
-                    if b:
-                        violated.append(p)
+        for ti in range(len(self.slots)):
+            self.evaluate_tag(ti, self.slots[ti].tag.name in queue, axis_envs, violated, reached)
         return violated, reached
+
+    def evaluate_axis(self, ai: int, violated: list[Property], reached: list[Property]) -> None:
+        """Axis ``ai``'s invariants violated and goals reached, appended to the lists."""
+        inv, reach = self.axis_props[ai]
+        if not inv and not reach:
+            return
+        key = self.axes[ai].snapshot()  # type: ignore[attr-defined]
+        memo = self._axis_memo.get(key)
+        if memo is None:
+            env = self.axis_env(ai)
+            memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
+            self._axis_memo[key] = memo
+        for p, ok in zip(inv, memo[0]):
+            if not ok:
+                violated.append(p)
+        for p, ok in zip(reach, memo[1]):
+            if ok:
+                reached.append(p)
+
+    def evaluate_tag(self, ti: int, queued: bool, axis_envs: dict[int, dict[str, object]],
+                     violated: list[Property], reached: list[Property]) -> None:
+        """Tag ``ti``'s invariants violated and goals reached, appended to the lists; its
+        response monitors updated.  ``axis_envs`` caches expression environments per axis."""
+        s = self.slots[ti]
+        if not s.inv and not s.reach and not s.monitors:
+            return
+        tag = s.tag
+        key: tuple[object, ...] = (ti, tuple(tag.values.values()), tag.rung, queued, self.monitor_values[ti])
+        if s.reads_axis:
+            key = (*key, self.axes[s.axis_index].snapshot())  # type: ignore[attr-defined]
+        memo2 = self._tag_memo.get(key)
+        if memo2 is None:
+            aenv = None
+            if s.reads_axis:
+                aenv = axis_envs.get(s.axis_index)
+                if aenv is None:
+                    aenv = self.axes[s.axis_index].expression_env()  # type: ignore[attr-defined]
+                    axis_envs[s.axis_index] = aenv
+            env = self.tag_env(ti, aenv, queued)
+            inv_ok = tuple(_holds(p, env, p.holds) for p in s.inv)
+            goals = tuple(_holds(p, env, p.goal) for p in s.reach)
+            mons: list[int] = []
+            bad: list[bool] = []
+            for p, m in zip(s.monitors, self.monitor_values[ti]):
+                m2, b = _monitor(p, env, m)
+                mons.append(m2)
+                bad.append(b)
+            memo2 = (inv_ok, goals, tuple(mons), tuple(bad))
+            self._tag_memo[key] = memo2
+        for p, ok in zip(s.inv, memo2[0]):
+            if not ok:
+                violated.append(p)
+        for p, ok in zip(s.reach, memo2[1]):
+            if ok:
+                reached.append(p)
+        if s.monitors:
+            self.monitor_values[ti] = memo2[2]
+            for p, b in zip(s.monitors, memo2[3]):
+                if b:
+                    violated.append(p)
 
 
 def _holds(p: Property, env: Mapping[str, object], e: object) -> bool:

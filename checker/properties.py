@@ -35,6 +35,9 @@ file, line and node path.
 
 from __future__ import annotations
 
+import ast
+import difflib
+
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -232,7 +235,13 @@ def _build(
         unknown = check_names(e, known)
         for n, _off in unknown:
             err((key,), f"unknown name {n!r} in {text!r} for scope {scope}; known: {', '.join(sorted(known))}")
-        return e if not unknown else None
+        states = sorted({st.id for c in charts for st in c.leaf_states()})
+        bad = [lit for lit in state_literals(text) if lit not in states]
+        for lit in bad:
+            hint = difflib.get_close_matches(lit, states, n=1, cutoff=0.6)
+            did = f" (did you mean {hint[0]!r}?)" if hint else ""
+            err((key,), f"{text!r} compares the state with {lit!r}, which is no leaf state{did}; states: {', '.join(states)}")
+        return e if not unknown and not bad else None
 
     cover = node.get("cover")
     variable = node.get("variable")
@@ -259,3 +268,25 @@ def _build(
         within=int(node.get("within", 1)), cover=cover, variable=variable, unreachable=unreachable,
     )
     return prop if len(errors) == before else None
+
+
+def state_literals(text: str) -> list[str]:
+    """The strings an expression compares ``state`` (or ``axis.state``) with."""
+    try:
+        tree = ast.parse(text.strip(), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return []
+    out: list[str] = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Compare):
+            continue
+        operands = [node.left, *node.comparators]
+        if not any(ast.unparse(o) in ("state", "axis.state") for o in operands):
+            continue
+        for o in operands:
+            if isinstance(o, ast.Constant) and isinstance(o.value, str):
+                out.append(o.value)
+            elif isinstance(o, (ast.Tuple, ast.List, ast.Set)):
+                out.extend(x.value for x in o.elts if isinstance(x, ast.Constant) and isinstance(x.value, str))
+    return out
+

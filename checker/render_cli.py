@@ -35,6 +35,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import InputError
 
 COMMANDS = ("diagram", "docs", "generate")
@@ -85,7 +86,7 @@ def dispatch(args: argparse.Namespace) -> int | None:
 
     prog = f"motionchart {command}"
     try:
-        missing = [p for p in (args.spec or []) if not Path(p).exists()]
+        missing = [shown_name(p) for p in (args.spec or []) if path_argument_problem(p) is not None]
         if missing:
             return _fail(prog, f"no such file or directory: {', '.join(missing)}", EXIT_USAGE)
         if command == "diagram":
@@ -191,7 +192,7 @@ def _check_inputs(args: argparse.Namespace, prog: str) -> int | None:
     bad = _check_out_dir(Path(args.output), prog)
     if bad is not None:
         return bad
-    missing = [s for s in (args.scenarios or []) if not Path(s).exists()]
+    missing = [shown_name(s) for s in (args.scenarios or []) if path_argument_problem(s) is not None]
     if missing:
         return _fail(prog, f"no such scenario directory: {', '.join(missing)}", EXIT_USAGE)
     return None

@@ -13,6 +13,7 @@ from checker import coverage as cov
 from checker.counterexample import Trace, replay, table_text, write_scenario
 from checker.properties import Property
 from checker.search import SearchResult
+from statecharts.outputs import atomic_write_with
 
 
 @dataclass
@@ -196,7 +197,7 @@ def graph_analyses(result: SearchResult, graphml: Path | None) -> dict[str, obje
     g = to_networkx(result)
     if graphml is not None:
         graphml.parent.mkdir(parents=True, exist_ok=True)
-        nx.write_graphml(g, graphml)
+        atomic_write_with(graphml, lambda tmp: nx.write_graphml(g, tmp))
     sccs = list(nx.strongly_connected_components(g))
     dead = [n for n in g if not any(s != n for s in g.successors(n))]
     initial = [n for n, d in g.nodes(data=True) if d["initial"]]

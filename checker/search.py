@@ -44,12 +44,14 @@ from __future__ import annotations
 
 import os
 import resource
+import struct
 import sys
 import time
 from array import array
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from checker.core import CompiledModel
 from checker.model import Flat, Model
 from checker.properties import Property
 
@@ -77,6 +79,13 @@ class Coverage:
     executed: set[tuple[str, str]] = field(default_factory=set)
     errors: set[tuple[str, int, int]] = field(default_factory=set)
     values: set[tuple[str, str, object]] = field(default_factory=set)
+    #: (instruction, check id) of every check or abort that failed first in some step
+    checks: set[tuple[str, str]] = field(default_factory=set)
+    #: with ``explore(witnesses=True)``: every coverage item -> ``(state, choice)`` of the
+    #: first step (in BFS order, hence of least depth) that showed it; items are
+    #: ``("transition", chart, id)``, ``("cell", instruction, state)``,
+    #: ``("error", instruction, ERR, EXERR)`` and ``("check", instruction, check id)``
+    first: dict[tuple[object, ...], tuple[int, int]] = field(default_factory=dict)
 
 
 @dataclass
@@ -93,13 +102,17 @@ class SearchResult:
     deadlocks: list[int]
     coverage: Coverage
     peak_rss_kb: int
-    codec: Codec
+    codec: Codec | CoreCodec
     encoded: list[bytes]
     parent: array
     via: array
     depth_of: array
     edges: array | None
     initial_assignment: dict[int, int]
+    #: bytes of the visited set's table (the compiled core's search; 0 otherwise)
+    visited_bytes: int = 0
+    #: the compiled core the search ran on (None for the interpreter back-end)
+    core: object = None
 
     @property
     def states_per_second(self) -> float:
@@ -185,7 +198,7 @@ def _progress_wanted() -> bool:
     return sys.stderr.isatty() and os.environ.get("CI", "").lower() not in ("true", "1")
 
 
-def explore(
+def explore_interpreted(
     model: Model,
     *,
     max_states: int | None = None,
@@ -194,12 +207,16 @@ def explore(
     progress: bool | None = None,
     on_progress: Callable[[int, int, float], None] | None = None,
     stop_on_violation: bool = False,
+    witnesses: bool = False,
 ) -> SearchResult:
-    """Explore every state of ``model`` reachable from its initial states, breadth first.
+    """The interpreter back-end of the search: every step loads a whole
+    :class:`statecharts.scan.System`, scans it and extracts the successor.  Kept as the
+    reference the compiled core (:func:`explore`) is tested against.
 
     With ``stop_on_violation`` the search ends (incomplete) after the expansion in which
     the first invariant or response violation was found; that violation is still one of
-    least depth."""
+    least depth.  With ``witnesses`` the coverage records, for every item, the first
+    step that covered it (:attr:`Coverage.first`), from which a shortest run is replayed."""
     start = time.perf_counter()
     codec = Codec(model)
     index: dict[bytes, int] = {}
@@ -307,6 +324,10 @@ def explore(
                     cov.executed.update(facts.executed)
                 if facts.errors:
                     cov.errors.update(facts.errors)
+                if facts.checks:
+                    cov.checks.update(facts.checks)
+                if witnesses and (facts.fired or facts.executed or facts.errors or facts.checks):
+                    _note_witnesses(cov.first, facts, i, ch.index)
                 if bad:
                     for p in bad:
                         if p.name not in violations:
@@ -343,5 +364,211 @@ class _Stop(Exception):
     pass
 
 
+def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
+    where = (state, choice)
+    for c, t in facts.fired:  # type: ignore[attr-defined]
+        first.setdefault(("transition", c, t), where)
+    for m, s in facts.executed:  # type: ignore[attr-defined]
+        first.setdefault(("cell", m, s), where)
+    for m, e, x in facts.errors:  # type: ignore[attr-defined]
+        first.setdefault(("error", m, e, x), where)
+    for m, c in facts.checks:  # type: ignore[attr-defined]
+        first.setdefault(("check", m, c), where)
+
+
 def is_property_decided(result: SearchResult, p: Property) -> bool:
     return p.name in result.violations or p.name in result.reached or result.complete
+
+
+# --------------------------------------------------------------------------- the compiled core
+
+
+class CoreCodec:
+    """States of the compiled core <-> packed ``bytes`` (2 bytes a slot, 4 once a slot
+    has more than 65,536 values) and interpreter flat states."""
+
+    def __init__(self, core: CompiledModel) -> None:
+        self.core = core
+        self.set_format("H")
+
+    def set_format(self, code: str) -> None:
+        self.format = code
+        st = struct.Struct(f"<{self.core.width}{code}")
+        self.pack = st.pack
+        self.unpack = st.unpack
+
+    def encode(self, flat: Flat) -> bytes:
+        return self.pack(*self.core.encode_flat(flat))
+
+    def decode(self, raw: bytes) -> Flat:
+        return self.core.decode(self.unpack(raw))
+
+
+def stored_bytes(result: SearchResult) -> int:
+    """Bytes held by the stored states: the visited set, the packed states, the BFS
+    list and the parent / choice / depth columns."""
+    total = sys.getsizeof(result.encoded) + sum(sys.getsizeof(c) for c in result.encoded)
+    total += result.visited_bytes
+    for col in (result.parent, result.via, result.depth_of):
+        total += col.buffer_info()[1] * col.itemsize
+    return total
+
+
+def explore(
+    model: Model,
+    *,
+    max_states: int | None = None,
+    max_seconds: float | None = None,
+    keep_graph: bool = False,
+    progress: bool | None = None,
+    on_progress: Callable[[int, int, float], None] | None = None,
+    stop_on_violation: bool = False,
+) -> SearchResult:
+    """Explore every state of ``model`` reachable from its initial states, breadth first,
+    on the compiled core (:mod:`checker.core`).
+
+    With ``stop_on_violation`` the search ends (incomplete) after the expansion in which
+    the first invariant or response violation was found; that violation is still one of
+    least depth."""
+    start = time.perf_counter()
+    core = CompiledModel(model)
+    codec = CoreCodec(core)
+    pack = codec.pack
+    unpack = codec.unpack
+    index: dict[bytes, int] = {}
+    seen: set[bytes] = set()
+    encoded: list[bytes] = []
+    parent = array("i")
+    via = array("i")
+    depth_of = array("H")
+    edges = array("I") if keep_graph else None
+    violations: dict[str, Witness] = {}
+    reached: dict[str, Witness] = {}
+    deadlocks: list[int] = []
+    initial_assignment: dict[int, int] = {}
+    transitions = 0
+
+    def widen() -> None:
+        nonlocal pack, unpack
+        old = codec.unpack
+        codec.set_format("I")
+        pack, unpack = codec.pack, codec.unpack
+        for n, raw in enumerate(encoded):
+            encoded[n] = pack(*old(raw))
+        seen.clear()
+        seen.update(encoded)
+        if keep_graph:
+            index.clear()
+            index.update((c, n) for n, c in enumerate(encoded))
+
+    def encode(state: tuple[int, ...]) -> bytes:
+        try:
+            return pack(*state)
+        except struct.error:
+            widen()
+            return pack(*state)
+
+    for ai_index, (state, bad, good) in enumerate(core.initial_states()):
+        code = encode(state)
+        if code in seen:
+            continue
+        sid = len(encoded)
+        seen.add(code)
+        if keep_graph:
+            index[code] = sid
+        encoded.append(code)
+        parent.append(-1)
+        via.append(ai_index)
+        depth_of.append(0)
+        initial_assignment[sid] = ai_index
+        for p in bad:
+            violations.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
+        for p in good:
+            reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
+
+    show = _progress_wanted() if progress is None else progress
+    bar = None
+    task = None
+    if show:
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+        bar = Progress(TextColumn("[bold]check[/bold] {task.fields[system]}"), BarColumn(),
+                       TextColumn("{task.fields[found]:,} states  {task.fields[rate]}  queue {task.fields[queue]:,}"),
+                       TimeElapsedColumn(), transient=True)
+        bar.start()
+        task = bar.add_task("explore", total=len(encoded), system=model.sysdef.name, rate="", found=len(encoded),
+                            queue=len(encoded))
+    stop_reason: str | None = None
+    i = 0
+    successors = core.successors
+    try:
+        while i < len(encoded):
+            if i % CHECK_EVERY == 0:
+                elapsed = time.perf_counter() - start
+                if max_seconds is not None and elapsed > max_seconds:
+                    stop_reason = f"time limit of {max_seconds:g} s reached"
+                    break
+                if bar is not None and task is not None:
+                    bar.update(task, completed=i, total=len(encoded), found=len(encoded), queue=len(encoded) - i,
+                               rate=f"{len(encoded) / max(elapsed, 1e-9):,.0f} states/s")
+                if on_progress is not None:
+                    on_progress(i, len(encoded), elapsed)
+            own = encoded[i]
+            d = depth_of[i] + 1
+            succs: set[bytes] = set()
+            for c, succ, bad, good in successors(unpack(own)):
+                try:
+                    code = pack(*succ)
+                except struct.error:
+                    old_unpack = unpack
+                    widen()
+                    code = pack(*succ)
+                    own = encoded[i]
+                    succs = {pack(*old_unpack(x)) for x in succs}
+                if code not in seen:
+                    if max_states is not None and len(encoded) >= max_states:
+                        stop_reason = f"state limit of {max_states:,} reached"
+                        raise _Stop
+                    if keep_graph:
+                        index[code] = len(encoded)
+                    seen.add(code)
+                    encoded.append(code)
+                    parent.append(i)
+                    via.append(c)
+                    depth_of.append(d)
+                if bad:
+                    for p in bad:
+                        if p.name not in violations:
+                            violations[p.name] = Witness(p.name, i, c, d)
+                if good:
+                    for p in good:
+                        if p.name not in reached:
+                            reached[p.name] = Witness(p.name, i, c, d)
+                succs.add(code)
+            transitions += len(succs)
+            if edges is not None:
+                for code in succs:
+                    edges.append(i)
+                    edges.append(index[code])
+            if not succs or (len(succs) == 1 and own in succs):
+                deadlocks.append(i)
+            i += 1
+            if stop_on_violation and violations:
+                stop_reason = "stopped at the first violation"
+                break
+    except _Stop:
+        pass
+    finally:
+        if bar is not None:
+            bar.stop()
+    seconds = time.perf_counter() - start
+    cov = core.cov
+    coverage = Coverage(set(cov.configs), set(cov.fired), set(cov.executed), set(cov.errors), set(cov.values))
+    return SearchResult(
+        model=model, states=len(encoded), transitions=transitions,
+        depth=max(depth_of) if len(depth_of) else 0, seconds=seconds, complete=stop_reason is None,
+        stop_reason=stop_reason, violations=violations, reached=reached, deadlocks=deadlocks, coverage=coverage,
+        peak_rss_kb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, codec=codec, encoded=encoded,
+        parent=parent, via=via, depth_of=depth_of, edges=edges, initial_assignment=initial_assignment,
+        visited_bytes=sys.getsizeof(index if keep_graph else seen), core=core,
+    )

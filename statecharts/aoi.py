@@ -321,8 +321,10 @@ def _check_interpretations(f: str, tree: Any, errors: list[Diagnostic], root: Pa
     """Every `interpretation:` the file cites must exist in interpretations.yaml."""
     known: set[str] = set()
     doc = read_yaml(root / "interpretations.yaml", [])
-    if doc is not None:
-        known = {str(i.get("id")) for i in _plain(doc).get("interpretations", []) if isinstance(i, dict)}
+    listed = _plain(doc).get("interpretations") if isinstance(doc, Mapping) else None
+    if not isinstance(listed, list):
+        return  # interpretations.yaml itself is wrong: the spec loader reports that
+    known = {str(i.get("id")) for i in listed if isinstance(i, dict)}
     stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
     while stack:
         node, parts = stack.pop()

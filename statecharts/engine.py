@@ -33,7 +33,7 @@ from statemachine import StateChart
 from statemachine.io import create_machine_class_from_definition
 
 from statecharts import ir
-from statecharts.expr import Assignment
+from statecharts.expr import Assignment, EvalError
 
 #: Values of the system parameters that axis-chart expressions may read.
 DEFAULT_PARAMETERS: dict[str, int] = {"coarse_update_ms": 10, "scan_ms": 10}
@@ -43,10 +43,23 @@ DEFAULT_PARAMETERS: dict[str, int] = {"coarse_update_ms": 10, "scan_ms": 10}
 SETTLE_EVENT = "_settle"
 
 
+#: Most eventless transitions one macrostep (the processing of one event) may take.
+MAX_MICROSTEPS = 1000
+
+
+class EventlessLoopError(EvalError):
+    """Eventless transitions kept firing within one macrostep: a cycle the loader could
+    not rule out (its guards read variables without a finite domain)."""
+
+
 class ChartModel:
-    """The model object python-statemachine calls back into; holds one axis's variables."""
+    """The model object python-statemachine calls back into; holds one axis's variables.
+
+    ``microsteps`` counts the eventless transitions taken since the last event was sent
+    (see :data:`MAX_MICROSTEPS`)."""
 
     env: dict[str, object]
+    microsteps: int = 0
 
     def __init__(self, env: dict[str, object]) -> None:
         self.env = env
@@ -55,6 +68,23 @@ class ChartModel:
 def _guard_method(guard: Callable[[Mapping[str, object]], object]) -> Callable[..., bool]:
     def method(self: ChartModel, *args: object, **kwargs: object) -> bool:
         return bool(guard(self.env))
+
+    return method
+
+
+def _eventless_guard_method(
+    chart_id: str, t: ir.Transition, guard: Callable[[Mapping[str, object]], object]
+) -> Callable[..., bool]:
+    def method(self: ChartModel, *args: object, **kwargs: object) -> bool:
+        taken = bool(guard(self.env))
+        if taken:
+            self.microsteps += 1
+            if self.microsteps > MAX_MICROSTEPS:
+                raise EventlessLoopError(
+                    f"chart {chart_id}: eventless transition {t.id!r} (from {t.source!r}, {t.location}) "
+                    f"is still enabled after {MAX_MICROSTEPS} eventless transitions in one macrostep: "
+                    "an eventless loop", t.guard.text if t.guard is not None else "")
+        return taken
 
     return method
 
@@ -115,7 +145,8 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
         for t in _ordered(x for x in chart.transitions if x.source == state.id):
             td: dict[str, Any] = {"target": t.target}
             if t.guard is not None:
-                model_attrs[f"guard__{t.id}"] = _guard_method(t.guard)
+                model_attrs[f"guard__{t.id}"] = (
+                    _guard_method(t.guard) if t.event is not None else _eventless_guard_method(chart.id, t, t.guard))
                 td["cond"] = [f"guard__{t.id}"]
             if t.actions:
                 model_attrs[f"action__{t.id}"] = _action_method(t.actions)
@@ -182,7 +213,7 @@ class AxisInstance:
             self.env.update(variables)
         # eventless transitions enabled by the set-up are taken before the first scan,
         # whether the axis starts in its initial state or in a named one
-        self.machine.send(SETTLE_EVENT)
+        self.send(SETTLE_EVENT)
 
     def _force(self, state: str, preset: Mapping[str, object]) -> None:
         """Start in ``state``: its configuration is entered and its entry actions run."""
@@ -215,6 +246,7 @@ class AxisInstance:
         return self.leaf.value
 
     def send(self, event: str) -> None:
+        self.model.microsteps = 0
         self.machine.send(event)
 
     def snapshot(self) -> tuple[frozenset[str], tuple[object, ...]]:

@@ -52,8 +52,12 @@ Fn: TypeAlias = Callable[[Env], object]
 MAX_LENGTH: Final = 2000
 #: Deepest accepted AST nesting (counting every AST node on the path from the root).
 MAX_DEPTH: Final = 50
-#: Longest sequence that ``*`` may build by repetition (``'ab' * n``).
-MAX_REPEAT: Final = 1_000_000
+#: Longest string, tuple or list an expression may build (by ``*`` repetition or ``+``).
+MAX_SIZE: Final = 10_000
+#: Longest sequence that ``*`` may build by repetition (``'ab' * n``); kept as an alias.
+MAX_REPEAT: Final = MAX_SIZE
+#: Largest magnitude of an integer product (Logix LINT is 64 bits).
+MAX_INT: Final = 2**63 - 1
 
 _ALLOWED: Final = (
     "allowed: constants, names, dotted names, and/or/not, + - * / // %, "
@@ -101,6 +105,8 @@ def _eval_error(text: str, exc: Exception) -> EvalError:
         return EvalError(f"unknown variable {key!r} in expression {text!r}", text)
     if isinstance(exc, ZeroDivisionError):
         return EvalError(f"division by zero in expression {text!r}", text)
+    if isinstance(exc, LimitError):
+        return EvalError(f"{exc} in expression {text!r}", text)
     return EvalError(f"{type(exc).__name__} in expression {text!r}: {exc}", text)
 
 
@@ -228,7 +234,29 @@ def _parse(text: str, mode: Literal["eval", "exec"], what: str) -> tuple[ast.AST
     except ValueError as exc:  # e.g. lone surrogates, null bytes on other versions
         raise ExprError(f"{what} cannot be parsed: {exc}", text, 0) from None
     _check_depth(tree, src)
+    if not body.isascii():
+        _check_identifiers(text, body, src)
     return tree, src
+
+
+def _check_identifiers(text: str, body: str, src: _Source) -> None:
+    """Refuse identifiers that Python would silently NFKC-normalise to other letters
+    (full-width or mathematical-bold letters reading as an ASCII variable name)."""
+    import io
+    import tokenize
+    import unicodedata
+
+    try:
+        tokens = list(tokenize.generate_tokens(io.StringIO(body).readline))
+    except (tokenize.TokenError, SyntaxError, ValueError):
+        return  # the parser accepted it; positions are only a refinement
+    for tok in tokens:
+        if tok.type == tokenize.NAME and not tok.string.isascii():
+            normal = unicodedata.normalize("NFKC", tok.string)
+            if normal != tok.string:
+                raise ExprError(
+                    f"identifier {tok.string!r} uses look-alike Unicode letters (it would read as {normal!r}); "
+                    "write names in ASCII", text, src.at_char(tok.start[0], tok.start[1]))
 
 
 def _check_depth(tree: ast.AST, src: _Source) -> None:
@@ -251,18 +279,34 @@ _NUMBER_TYPES: Final = (int, float, bool)
 _SEQUENCE_TYPES: Final = (str, bytes, tuple, list)
 
 
+class LimitError(ValueError):
+    """An expression would build a value larger than the language allows."""
+
+
 def _mul(a: object, b: object) -> object:
     ta = type(a)
     tb = type(b)
+    if ta is int and tb is int:
+        r = a * b  # type: ignore[operator]
+        if -MAX_INT <= r <= MAX_INT:
+            return r
+        raise LimitError(f"integer product beyond 64 bits (at most {MAX_INT} in magnitude)")
     if (ta is int or ta is float or ta is bool) and (tb is int or tb is float or tb is bool):
         return a * b  # type: ignore[operator]
     if isinstance(a, _SEQUENCE_TYPES) and isinstance(b, int):
-        if len(a) * b > MAX_REPEAT:
-            raise ValueError(f"sequence repetition longer than {MAX_REPEAT}")
+        if len(a) * b > MAX_SIZE:
+            raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
     elif isinstance(b, _SEQUENCE_TYPES) and isinstance(a, int):
-        if len(b) * a > MAX_REPEAT:
-            raise ValueError(f"sequence repetition longer than {MAX_REPEAT}")
+        if len(b) * a > MAX_SIZE:
+            raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
     return a * b  # type: ignore[operator]
+
+
+def _add(a: object, b: object) -> object:
+    r = a + b  # type: ignore[operator]
+    if type(r) in _SEQUENCE_TYPES and len(r) > MAX_SIZE:  # type: ignore[arg-type]
+        raise LimitError(f"concatenation longer than {MAX_SIZE}")
+    return r
 
 
 def _mod(a: object, b: object) -> object:
@@ -292,11 +336,11 @@ _BinFactories: TypeAlias = tuple[
 _BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], object], _BinFactories]]] = {
     ast.Add: (
         "+",
-        lambda a, b: a + b,  # type: ignore[operator]
+        _add,
         (
-            lambda l, r: lambda env: l(env) + r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) + c,  # type: ignore[operator]
-            lambda c, r: lambda env: c + r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: _add(l(env), r(env)),
+            lambda l, c: (lambda env: l(env) + c) if type(c) in _NUMBER_TYPES else (lambda env: _add(l(env), c)),
+            lambda c, r: (lambda env: c + r(env)) if type(c) in _NUMBER_TYPES else (lambda env: _add(c, r(env))),
         ),
     ),
     ast.Sub: (
@@ -513,6 +557,8 @@ def _folded(fn: Fn) -> _Node:
     """Evaluate a closure built only from constants once; keep it lazy if that fails."""
     try:
         value = fn({})
+    except LimitError:
+        raise  # reported at load time: the value would be too large whenever it is computed
     except (ArithmeticError, TypeError, ValueError):
         return _Node(fn)  # the error belongs to run time, where it is reported with context
     if _is_immutable(value):
@@ -822,7 +868,10 @@ def _build_expression(text: str) -> tuple[Expr, dict[str, int]]:
     tree, src = _parse(text, "eval", "expression")
     assert isinstance(tree, ast.Expression)
     comp = _Compiler(src)
-    node = comp.expr(tree.body)
+    try:
+        node = comp.expr(tree.body)
+    except LimitError as exc:
+        raise ExprError(f"{exc} in expression {text!r}", text, 0) from None
     return Expr(text, frozenset(comp.names), node.fn), comp.names
 
 
@@ -872,7 +921,10 @@ def _build_assignment(text: str) -> tuple[Assignment, dict[str, int], int]:
     else:
         kind = type(stmt).__name__.lower()
         raise comp.refuse(f"{kind} statement", stmt)
-    node = comp.expr(value_node)
+    try:
+        node = comp.expr(value_node)
+    except LimitError as exc:
+        raise ExprError(f"{exc} in action {text!r}", text, 0) from None
     value = Expr(value_text, frozenset(comp.names), node.fn)
     return Assignment(text, target, value), comp.names, target_off
 
@@ -889,11 +941,27 @@ def _load_copy(t: ast.expr) -> ast.expr:
 
 def parse_expression(text: str) -> Expr:
     """Parse and check a guard/check expression; raise ExprError if not allowed."""
-    return _build_expression(text)[0]
+    if not isinstance(text, str):
+        return _build_expression(text)[0]
+    return _parse_expression_cached(text)
 
 
 def parse_assignment(text: str) -> Assignment:
     """Parse ``target = expr`` (or ``+=`` / ``-=``); raise ExprError if not allowed."""
+    if not isinstance(text, str):
+        return _build_assignment(text)[0]
+    return _parse_assignment_cached(text)
+
+
+# Expressions are immutable and their closures hold no state, so one parse per text serves
+# every load (an error is not cached: it is raised again from a fresh parse).
+@functools.lru_cache(maxsize=8192)
+def _parse_expression_cached(text: str) -> Expr:
+    return _build_expression(text)[0]
+
+
+@functools.lru_cache(maxsize=8192)
+def _parse_assignment_cached(text: str) -> Assignment:
     return _build_assignment(text)[0]
 
 
@@ -926,3 +994,77 @@ def check_names(expr: Expr | Assignment, known: Collection[str]) -> list[tuple[s
         else:
             pairs = tuple((n, 0) for n in sorted(expr.names))
     return sorted(((n, off) for n, off in pairs if n not in known), key=lambda p: (p[1], p[0]))
+
+
+# --------------------------------------------------------------------------- result kinds
+
+#: The kinds :func:`result_kinds` speaks of.
+KINDS: Final = frozenset({"bool", "int", "real", "str", "none"})
+
+
+def result_kinds(expr: Expr, kinds: Mapping[str, frozenset[str]]) -> tuple[frozenset[str], tuple[object, ...]]:
+    """What ``expr`` can evaluate to, without running it: (kinds, constants).
+
+    ``kinds`` maps each variable to the kinds it may hold (absent: any kind).  The
+    result is a subset of :data:`KINDS`, or all of them when it cannot be told; the
+    constants are the literal values among the possible results (the branches of
+    ``a if c else b`` that are literals), for domain checks.
+    """
+    try:
+        tree = ast.parse(expr.text.lstrip(_LEADING_WS), mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return KINDS, ()
+    consts: list[object] = []
+    found = _kinds(tree.body, kinds, consts, 0)
+    return found, tuple(consts)
+
+
+def _kinds(node: ast.AST, kinds: Mapping[str, frozenset[str]], consts: list[object], depth: int) -> frozenset[str]:
+    if depth > MAX_DEPTH:
+        return KINDS
+    if isinstance(node, ast.Constant):
+        v = node.value
+        consts.append(v)
+        if isinstance(v, bool):
+            return frozenset({"bool"})
+        if isinstance(v, int):
+            return frozenset({"int"})
+        if isinstance(v, float):
+            return frozenset({"real"})
+        if isinstance(v, str):
+            return frozenset({"str"})
+        if v is None:
+            return frozenset({"none"})
+        return KINDS
+    if isinstance(node, (ast.Compare, ast.BoolOp)) or (isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.Not)):
+        return frozenset({"bool"})
+    if isinstance(node, (ast.Name, ast.Attribute)):
+        name = _dotted(node)
+        return kinds.get(name, KINDS) if name is not None else KINDS
+    if isinstance(node, ast.IfExp):
+        return _kinds(node.body, kinds, consts, depth + 1) | _kinds(node.orelse, kinds, consts, depth + 1)
+    ignored: list[object] = []
+    if isinstance(node, ast.UnaryOp):
+        inner = _kinds(node.operand, kinds, ignored, depth + 1)
+        return _numeric(inner)
+    if isinstance(node, ast.BinOp):
+        left = _kinds(node.left, kinds, ignored, depth + 1)
+        right = _kinds(node.right, kinds, ignored, depth + 1)
+        if isinstance(node.op, ast.Div):
+            return frozenset({"real"})
+        if isinstance(node.op, (ast.Add, ast.Mult)) and ("str" in left or "str" in right):
+            return KINDS
+        return _numeric(left | right)
+    if isinstance(node, ast.Call) and _dotted(node.func) in _FUNCTIONS:
+        out: frozenset[str] = frozenset()
+        for a in node.args:
+            out |= _kinds(a, kinds, ignored, depth + 1)
+        return out or KINDS
+    return KINDS
+
+
+def _numeric(kinds: frozenset[str]) -> frozenset[str]:
+    """Arithmetic on these kinds gives a number: real if a real may be involved."""
+    if not kinds <= {"bool", "int", "real"}:
+        return KINDS
+    return frozenset({"real"}) if "real" in kinds else frozenset({"int", "real"} & ({"int"} | kinds))

@@ -25,12 +25,13 @@ unknown charts...).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 import math
 import re
 import warnings
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -42,11 +43,15 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 
 from statecharts import ir, sources
+from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
-from statecharts.expr import Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression
+from statecharts.inputs import MAX_INPUT_BYTES, read_input, shown_name
+from statecharts.expr import (
+    KINDS, Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression, result_kinds,
+)
 
 SPEC_FORMAT = "motionchart-spec/1"
-MAX_FILE_BYTES = 2_000_000
+MAX_FILE_BYTES = MAX_INPUT_BYTES
 #: Deepest nesting of YAML mappings and sequences accepted (the spec needs about 12).
 MAX_YAML_DEPTH = 64
 #: Most YAML nodes a file may expand to, counting each use of an alias (``*name``).
@@ -174,7 +179,9 @@ def bundled_spec_dir() -> Path:
     return Path(str(resources.files("motionchart_spec")))
 
 
+@functools.lru_cache(maxsize=1)
 def spec_schema() -> dict[str, Any]:
+    """The spec's JSON Schema (read once; treat it as read-only)."""
     text = (bundled_spec_dir() / "schema" / "spec.schema.json").read_text(encoding="utf-8")
     schema: dict[str, Any] = json.loads(text)
     return schema
@@ -271,15 +278,15 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     tree can be returned together with new diagnostics (e.g. a non-string key): the
     caller must not build from a file that added diagnostics.
     """
-    name = str(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"cannot read {what}: {exc.strerror or exc}"))
+    name = shown_name(path)
+    raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
+    if raw is None:
         return None
-    if len(raw) > MAX_FILE_BYTES:
-        errors.append(Diagnostic(name, 1, 1, "", f"{what} is larger than {MAX_FILE_BYTES} bytes"))
-        return None
+    return parse_yaml_bytes(name, raw, errors, what=what)
+
+
+def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
+    """:func:`read_yaml` on bytes already read (``name`` is the file shown in diagnostics)."""
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -315,6 +322,53 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     problems, fatal = tree_diagnostics(name, tree, what=what)
     errors.extend(problems)
     return None if fatal else tree
+
+
+def read_document(path: Path, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
+    """Read one input document: JSON when the name ends in ``.json``, else YAML.
+
+    The one reader of user files: :func:`~statecharts.inputs.read_input` (regular files
+    only, bounded size), then the parser, then :func:`tree_diagnostics`.  A JSON
+    document is parsed with the json module (exact error positions) and, when it is
+    also valid YAML with the same content, returned as the YAML tree so that later
+    diagnostics carry line numbers.  Returns ``None`` when nothing can be checked further.
+    """
+    if Path(path).suffix != ".json":
+        return read_yaml(Path(path), errors, what=what)
+    name = shown_name(path)
+    raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
+    if raw is None:
+        return None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        errors.append(Diagnostic(name, 1, 1, "", f"{what} is not UTF-8 text ({exc.reason} at byte {exc.start})"))
+        return None
+    try:
+        tree = json.loads(text, parse_constant=_json_constant)
+    except json.JSONDecodeError as exc:
+        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
+        return None
+    except ValueError as exc:  # NaN / Infinity, or an integer too long to convert
+        errors.append(Diagnostic(name, 1, 1, "", f"JSON error: {exc}"))
+        return None
+    except RecursionError:
+        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
+        return None
+    problems, fatal = tree_diagnostics(name, tree, what=what)
+    if problems:
+        errors.extend(problems)
+        return None if fatal else tree
+    positioned = parse_yaml_bytes(name, raw, [], what=what)
+    try:
+        same = positioned is not None and _plain(positioned) == tree
+    except RecursionError:
+        same = False
+    return positioned if same else tree
+
+
+def _json_constant(text: str) -> Any:
+    raise ValueError(f"{text} is not a number a motionchart file may hold")
 
 
 _FLOW_TOKENS = re.compile(r"[\[\]{}#'\"\n]")
@@ -460,6 +514,23 @@ def _node_at(tree: Any, parts: tuple[Any, ...]) -> Any:
     return node
 
 
+_VALIDATORS: dict[int, tuple[dict[str, Any], Any]] = {}
+#: (schema, document text) pairs already found valid: a valid document is valid again.
+_VALID_DOCUMENTS: set[tuple[int, str]] = set()
+
+
+def _validator(schema: dict[str, Any]) -> Any:
+    """A compiled validator per schema object (building one costs more than a small file)."""
+    hit = _VALIDATORS.get(id(schema))
+    if hit is not None and hit[0] is schema:
+        return hit[1]
+    if len(_VALIDATORS) > 16:
+        _VALIDATORS.clear()
+    validator = jsonschema.Draft202012Validator(schema)
+    _VALIDATORS[id(schema)] = (schema, validator)
+    return validator
+
+
 def schema_diagnostics(
     name: str, tree: Any, schema: dict[str, Any], what: str
 ) -> list[Diagnostic]:
@@ -467,9 +538,16 @@ def schema_diagnostics(
 
     An unknown key is reported at the key itself, with the keys that are allowed there.
     """
-    validator = jsonschema.Draft202012Validator(schema)
+    validator = _validator(schema)
+    plain = _plain(tree)
+    try:
+        key: tuple[int, str] | None = (id(schema), json.dumps(plain, sort_keys=True, default=repr))
+    except (TypeError, ValueError, RecursionError):
+        key = None
+    if key is not None and key in _VALID_DOCUMENTS:
+        return []
     out = []
-    for err in validator.iter_errors(_plain(tree)):
+    for err in validator.iter_errors(plain):
         parts = tuple(err.absolute_path)
         if err.validator == "additionalProperties" and isinstance(err.instance, dict):
             allowed = sorted(err.schema.get("properties", {}))
@@ -492,7 +570,117 @@ def schema_diagnostics(
         else:
             message = _expected(err)
         out.append(Diagnostic(name, line, col, where, message))
+    if not out and key is not None:
+        if len(_VALID_DOCUMENTS) > 512:
+            _VALID_DOCUMENTS.clear()
+        _VALID_DOCUMENTS.add(key)
     return out
+
+
+#: The Logix DINT range: ERR, EXERR, state values and integer tag values are DINTs.
+DINT_MIN, DINT_MAX = -(2**31), 2**31 - 1
+
+
+def number_diagnostics(name: str, tree: Any, *, what: str = "spec file") -> list[Diagnostic]:
+    """Numbers a spec file may not hold: integers outside the DINT range (ERR and EXERR,
+    state values, integer variables and operands are all DINTs in Logix), NaN and
+    infinities (a spec value is a finite number).  Iterative, over the whole tree."""
+    out: list[Diagnostic] = []
+    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
+    while stack:
+        node, parts = stack.pop()
+        if isinstance(node, dict):
+            stack.extend((v, (*parts, k)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
+        elif isinstance(node, bool):
+            continue
+        elif isinstance(node, int) and not DINT_MIN <= node <= DINT_MAX:
+            line, col = locate(tree, parts)
+            shown = str(node) if node.bit_length() <= 128 else f"an integer of {node.bit_length()} bits"
+            out.append(Diagnostic(name, line, col, node_path(parts), (
+                f"{shown} is outside the DINT range [{DINT_MIN}, {DINT_MAX}] of Logix integers")))
+        elif isinstance(node, float) and not math.isfinite(node):
+            line, col = locate(tree, parts)
+            out.append(Diagnostic(name, line, col, node_path(parts), f"{node} is not a finite number; a {what} holds finite values"))
+    return out
+
+
+def variable_kinds(v: ir.Variable) -> frozenset[str]:
+    """The kinds of value (:data:`statecharts.expr.KINDS`) a variable may hold."""
+    if v.type == "bool":
+        return frozenset({"bool"})
+    if v.type == "int":
+        return frozenset({"int"})
+    if v.type == "real":
+        return frozenset({"int", "real"})
+    found = set()
+    for value in v.domain or ():
+        found |= result_kinds(parse_expression(repr(value)), {})[0] if isinstance(value, (int, float, str)) else set()
+    return frozenset(found) or KINDS
+
+
+def assignment_problem(a: Assignment, var: ir.Variable, kinds: dict[str, frozenset[str]]) -> str | None:
+    """Why action ``a`` could give ``var`` a value of the wrong type or outside its domain, or None."""
+    got, constants = result_kinds(a.value, kinds)
+    wanted = variable_kinds(var)
+    if not got & wanted:
+        article = "an" if var.type[0] in "aeiou" else "a"
+        return (f"{a.text!r} assigns {' or '.join(sorted(_KIND_WORDS[k] for k in got))} to {var.name}, "
+                f"{article} {var.type} variable")
+    if var.domain is not None:
+        for c in constants:
+            if any(c == d and type(c) is type(d) for d in var.domain) or (
+                    var.type == "real" and isinstance(c, (int, float)) and not isinstance(c, bool) and c in var.domain):
+                continue
+            if var.type in ("int", "real") and var.domain and not isinstance(c, bool) and isinstance(c, (int, float)):
+                if c in var.domain:
+                    continue
+            return f"{a.text!r} can assign {c!r} to {var.name}, outside its domain {domain_text(var.domain)}"
+    return None
+
+
+def _parameter_result_problem(
+    a: Assignment, var: ir.Variable, domains: dict[str, tuple[Any, ...] | None], written: set[str]
+) -> str | None:
+    """An action that reads a parameter (a variable no action writes) and not its own
+    target, over finite domains only, is evaluated on every combination: each result
+    must be in the target's domain (a 10**9 ms enable delay must not make a 10**8-step
+    timer)."""
+    if var.domain is None or a.target in a.value.names or not a.value.names - written:
+        return None
+    names = sorted(a.value.names)
+    size = 1
+    for n in names:
+        d = domains.get(n)
+        if d is None:
+            return None
+        size *= len(d)
+        if size > 4096:
+            return None
+    for values in itertools.product(*(domains[n] or () for n in names)):
+        env = dict(zip(names, values))
+        try:
+            result = a.value(env)
+        except Exception as exc:  # noqa: BLE001 - every failure of third-party text is reported
+            shown = ", ".join(f"{k}={v!r}" for k, v in env.items())
+            return f"{a.text!r} cannot be evaluated with {shown}: {exc}"
+        if result not in var.domain or isinstance(result, bool) != isinstance(var.initial, bool):
+            shown = ", ".join(f"{k}={v!r}" for k, v in env.items())
+            return (f"{a.text!r} gives {var.name} the value {result!r} with {shown}, "
+                    f"outside its domain {domain_text(var.domain)}")
+    return None
+
+
+def domain_text(domain: Sequence[object]) -> str:
+    """A domain as a reader wants it: ``[0, 2000]`` for a long run of integers, else the list."""
+    values = list(domain)
+    if len(values) > 8 and all(type(v) is int for v in values) and values == list(range(values[0], values[-1] + 1)):  # type: ignore[call-overload]
+        return f"(the range {values[0]} to {values[-1]})"
+    return repr(values)
+
+
+_KIND_WORDS = {"bool": "a bool", "int": "an integer", "real": "a real", "str": "a string", "none": "None"}
 
 
 # --------------------------------------------------------------------------- building
@@ -745,7 +933,40 @@ class _Builder:
             return chart
         self._reachability(f, chart, state_nodes)
         self._overlaps(f, chart)
+        self._eventless_cycles(f, chart)
+        self._assignment_kinds(f, chart, state_nodes, [(i, e.actions) for i, e in enumerate(events)])
         return chart
+
+    def _assignment_kinds(
+        self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]],
+        events: list[tuple[int, tuple[Assignment, ...]]],
+    ) -> None:
+        """Each action must be able to give its variable a value of its type and domain."""
+        variables = {v.name: v for v in chart.variables}
+        kinds = {n: variable_kinds(v) for n, v in variables.items()}
+        kinds.update({k: frozenset({"int"}) for k in SYSTEM_PARAMETERS})
+        sites: list[tuple[tuple[Any, ...], Assignment]] = []
+        for i, acts in events:
+            sites.extend(((("chart", "events", i, "actions", j), a) for j, a in enumerate(acts)))
+        for s in chart.states:
+            for key, acts in (("entry", s.entry), ("exit", s.exit)):
+                sites.extend((((*state_nodes[s.id], key, j), a) for j, a in enumerate(acts)))
+        for i, t in enumerate(chart.transitions):
+            sites.extend(((("chart", "transitions", i, "actions", j), a) for j, a in enumerate(t.actions)))
+        written = {a.target for _, a in sites}
+        domains: dict[str, tuple[Any, ...] | None] = {v.name: v.domain for v in chart.variables}
+        domains.update(SYSTEM_PARAMETERS)
+        for parts, a in sites:
+            var = variables.get(a.target)
+            if var is None:
+                continue
+            problem = assignment_problem(a, var, kinds) or _parameter_result_problem(a, var, domains, written)
+            if problem:
+                self.error(f, parts, problem)
+
+    def _eventless_cycles(self, f: _File, chart: ir.Chart) -> None:
+        for cycle in eventless_cycles(chart, SYSTEM_PARAMETERS):
+            self.error(f, _loc_parts(cycle.transitions[0].location), cycle.describe())
 
     def _reachability(self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]]) -> None:
         reached: set[str] = set()
@@ -899,8 +1120,16 @@ class _Builder:
         member_nodes = node.items("members", "tag_member")
         self.duplicates(f, (*base, "members"), member_nodes, "name", "member")
         members = []
+        bits: dict[int, str] = {}
         for i, m in enumerate(member_nodes):
             bit = m.get("bit")
+            if bit is not None:
+                if not 0 <= int(bit) <= 31:
+                    self.error(f, (*base, "members", i, "bit"), f"bit {bit} of {m['name']} is outside a DINT (0 to 31)")
+                elif int(bit) in bits:
+                    self.error(f, (*base, "members", i, "bit"), f"bit {bit} of {m['name']} is already {bits[int(bit)]}")
+                else:
+                    bits[int(bit)] = str(m["name"])
             members.append(ir.TagMember(
                 name=m["name"], type=m["type"], bit=int(bit) if bit is not None else None,
                 description=str(m.get("description", "")), provenance=self.prov(f, (*base, "members", i), m),
@@ -1030,47 +1259,94 @@ def _hint(name: str, known: Iterable[str]) -> str:
 
 def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     """Load, validate and build the specification; raise SpecError with every problem found."""
-    schema = spec_schema()
-    b = _Builder()
-    files: list[_File] = []
-    failed_files = 0
+    errors: list[Diagnostic] = []
+    documents: list[tuple[str, Any]] = []
     all_paths = spec_files(paths)
-    registry, source_errors = sources.registry_for(all_paths)
-    cited_trees: list[tuple[str, Any]] = []
+    registry, registry_errors = sources.registry_for(all_paths)
+    side: list[tuple[str, Any]] = []
     for path in all_paths:
         # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files,
         # read here only for their citations (their own loaders report everything else)
         if path.suffix == ".json":
             continue
         if path.parent.name in ("schema", "systems", "properties") or path.parent.parent.name == "systems":
-            if registry is not None and path.parent.name != "schema":
-                side = read_yaml(path, [])
-                if side is not None:
-                    source_errors.extend(sources.tree_source_diagnostics(str(path), side, registry))
-                    cited_trees.append((str(path), side))
+            if path.parent.name != "schema":
+                tree = read_yaml(path, [])
+                if tree is not None:
+                    side.append((str(path), tree))
             continue
-        before = len(b.errors)
-        tree = read_yaml(path, b.errors)
+        before = len(errors)
+        tree = read_yaml(path, errors)
+        if tree is None and len(errors) == before:
+            errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+        documents.append((str(path), tree if len(errors) == before else _FAILED))
+    return _build_spec(documents, errors, str(paths[0]) if paths else "spec",
+                       registry=registry, registry_errors=registry_errors, side=side)
+
+
+def load_spec_documents(documents: Mapping[str, Any]) -> ir.Spec:
+    """Build the specification from parsed documents (file name -> YAML tree or plain
+    data), exactly as :func:`load_spec` builds it from files: the same shape, schema and
+    semantic checks, the same SpecError.  For tools that produce or transform spec data
+    in memory (and for the fuzzing tests, which mutate parsed trees)."""
+    errors: list[Diagnostic] = []
+    docs: list[tuple[str, Any]] = []
+    for name, tree in documents.items():
         if tree is None:
-            if len(b.errors) == before:
-                b.errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+            errors.append(Diagnostic(name, 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
+            docs.append((name, _FAILED))
+            continue
+        problems, fatal = tree_diagnostics(name, tree)
+        errors.extend(problems)
+        docs.append((name, _FAILED if problems or fatal else tree))
+    registry, registry_errors = sources.registry_for([])
+    return _build_spec(docs, errors, next(iter(documents), "spec"), registry=registry, registry_errors=registry_errors)
+
+
+_FAILED = object()  # a document that could not be read: its diagnostics are in the list already
+
+
+def _build_spec(
+    documents: Sequence[tuple[str, Any]], read_errors: list[Diagnostic], label: str, *,
+    registry: sources.Registry | None = None, registry_errors: Sequence[Diagnostic] = (),
+    side: Sequence[tuple[str, Any]] = (),
+) -> ir.Spec:
+    """Build from parsed documents.  ``registry`` resolves every ``source:`` (of the
+    documents and of the ``side`` files, the model checker's, checked only for their
+    citations); its own problems are ``registry_errors``."""
+    schema = spec_schema()
+    b = _Builder()
+    b.errors.extend(read_errors)
+    files: list[_File] = []
+    failed_files = 0
+    source_errors: list[Diagnostic] = list(registry_errors)
+    cited_trees: list[tuple[str, Any]] = []
+    if registry is not None:
+        for name, tree in side:
+            source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+            cited_trees.append((name, tree))
+    for name, tree in documents:
+        before = len(b.errors)
+        if tree is _FAILED or tree is None:
             failed_files += 1
             continue
-        if registry is not None:
-            source_errors.extend(sources.tree_source_diagnostics(str(path), tree, registry))
-            cited_trees.append((str(path), tree))
+        if registry is not None and isinstance(tree, (dict, list)):
+            source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+            cited_trees.append((name, tree))
         if _other_format(tree):
             # properties, systems... live beside the spec and have their own loaders; an
             # interpretation they cite still counts as used
             b.used_interpretations.update(_cited_interpretations(tree))
             continue
-        b.errors.extend(schema_diagnostics(str(path), tree, schema, "a spec file"))
+        b.errors.extend(schema_diagnostics(name, tree, schema, "a spec file"))
         if len(b.errors) == before:
-            files.append(_File(str(path), tree))
+            b.errors.extend(number_diagnostics(name, tree))
+        if len(b.errors) == before:
+            files.append(_File(name, tree))
         else:
             failed_files += 1
     if not files and not b.errors:
-        b.errors.append(Diagnostic(str(paths[0]) if paths else "spec", 1, 1, "", "no spec files (*.yaml) found"))
+        b.errors.append(Diagnostic(label, 1, 1, "", "no spec files (*.yaml) found"))
     # When a file could not be read, what it defines is unknown: checks across files
     # would only repeat its failure (every use of its charts, codes, interpretations).
     complete = failed_files == 0
@@ -1080,6 +1356,8 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     errors: list[ir.ErrorCode] = []
     extended: list[ir.ExtendedError] = []
     tag_type: ir.TagType | None = None
+    codes_seen: dict[int, str] = {}
+    extended_seen: dict[tuple[str, int, int], str] = {}
     for f in files:
         t = f.top
         for i, n in enumerate(t.items("interpretations", "interpretation")):
@@ -1091,14 +1369,21 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
                 id=n["id"], title=n["title"], text=" ".join(str(n["text"]).split()),
                 confidence=ir.Confidence(n["confidence"]), evidence=tuple(n["evidence"]),
             ))
-        codes_seen: set[int] = set()
         for i, n in enumerate(t.items("errors", "error")):
             code = int(n["code"])
             if code in codes_seen:
-                b.error(f, ("errors", i, "code"), f"duplicate error code {code}")
-            codes_seen.add(code)
+                b.error(f, ("errors", i, "code"), f"duplicate error code {code} (first defined at {codes_seen[code]})")
+                continue
+            codes_seen[code] = str(b.loc(f, ("errors", i, "code"))).rsplit(":", 1)[0]
             errors.append(ir.ErrorCode(code, n["name"], n["meaning"], ir.Confidence(n["confidence"]), b.prov(f, ("errors", i), n)))
         for i, n in enumerate(t.items("extended_errors", "extended_error")):
+            triple = (str(n["instruction"]), int(n["err"]), int(n["exerr"]))
+            if triple in extended_seen:
+                b.error(f, ("extended_errors", i), (
+                    f"duplicate extended error {triple[1]}/{triple[2]} of {triple[0]} "
+                    f"(first defined at {extended_seen[triple]})"))
+                continue
+            extended_seen[triple] = str(b.loc(f, ("extended_errors", i))).rsplit(":", 1)[0]
             extended.append(ir.ExtendedError(
                 n["instruction"], int(n["err"]), int(n["exerr"]), n["name"], n["meaning"], ir.Confidence(n["confidence"]),
                 b.prov(f, ("extended_errors", i), n),

@@ -44,10 +44,14 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
 from statecharts.expr import Assignment
+
+if TYPE_CHECKING:
+    from statecharts.program.ladder import Ladder
 
 #: MOTION_INSTRUCTION members reported in observations, in display order.
 TAG_FIELDS = ("EN", "DN", "ER", "PC", "IP", "ERR", "EXERR", "FLAGS")
@@ -92,6 +96,8 @@ class ScanInputs:
     operands: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
     events: tuple[EnvironmentEvent, ...] = ()
     prescan: bool = False
+    #: program tag writes made before the scan (push buttons, limit switches): path -> value
+    writes: Mapping[str, object] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,7 +156,14 @@ class TagInstance:
 
 
 class System:
-    """Axes, a program of instruction tags, and the scan clock."""
+    """Axes, a program of instruction tags, and the scan clock.
+
+    With ``ladder`` (a :class:`~statecharts.program.ladder.Ladder`), step 1 of the scan
+    is that ladder program: its routines run rung by rung, and each motion instruction
+    in them runs its execution-table row inline, in rung order, on its
+    MOTION_INSTRUCTION tag (``program`` then lists nothing; the ladder's motion
+    instructions become the tags).  Without it, every tag's rung is set from outside.
+    """
 
     def __init__(
         self,
@@ -160,6 +173,7 @@ class System:
         *,
         scan_ms: int = 10,
         coarse_update_ms: int = 10,
+        ladder: Ladder | None = None,
     ) -> None:
         if scan_ms <= 0 or coarse_update_ms <= 0:
             raise ValueError("scan_ms and coarse_update_ms must be positive")
@@ -170,7 +184,10 @@ class System:
             a.env["scan_ms"] = scan_ms
             a.env["coarse_update_ms"] = coarse_update_ms
         self.tags: dict[str, TagInstance] = {}
-        for tag, mnemonic, axis in program:
+        calls = list(program)
+        if ladder is not None:
+            calls.extend((b.tag, b.mnemonic, b.axis) for b in ladder.bindings if b.axis in self.axes)
+        for tag, mnemonic, axis in calls:
             self.tags[tag] = TagInstance(tag, self.variant(mnemonic, axis), spec.tag_type, axis)
         self.scan_ms = scan_ms
         self.coarse_update_ms = coarse_update_ms
@@ -180,6 +197,10 @@ class System:
         self.held_events: list[EnvironmentEvent] = []
         #: when a list, scans append Executed / Errored / Done records to it
         self.trace: list[Executed | Errored | Done] | None = None
+        self.ladder = ladder
+        if ladder is not None:
+            ladder.scan_ms = scan_ms
+            ladder.attach(self)
 
     def variant(self, mnemonic: str, axis: str) -> ir.Instruction:
         """The variant of ``mnemonic`` for the axis's chart.
@@ -207,6 +228,8 @@ class System:
 
     def advance(self, inputs: ScanInputs) -> bool:
         """One PLC scan without the observation record; True when it had a coarse update."""
+        if self.ladder is not None:
+            return self._advance_ladder(inputs)
         for name, rung in inputs.rungs.items():
             self.tags[name].rung = rung
         for name, ops in inputs.operands.items():
@@ -225,23 +248,51 @@ class System:
         self.index += 1
         return coarse
 
+    def _advance_ladder(self, inputs: ScanInputs) -> bool:
+        """A scan whose program is the ladder: tag writes, then the routines, then the coarse update."""
+        ladder = self.ladder
+        assert ladder is not None
+        for path, value in inputs.writes.items():
+            ladder.write(path, value)  # type: ignore[arg-type]
+        self.held_events.extend(inputs.events)
+        coarse = False
+        if inputs.prescan:
+            ladder.prescan()
+        else:
+            ladder.scan()
+            coarse = self.index % self.scans_per_update == 0
+            if coarse:
+                self._coarse_update()
+        self.index += 1
+        return coarse
+
+    def motion_row(self, tag: TagInstance, condition: str) -> None:
+        """Run one execution-table row of a motion instruction (the ladder calls this inline)."""
+        self._row(tag, condition)
+
     # -- state ----------------------------------------------------------------------
 
     def snapshot(self) -> tuple[object, ...]:
         """The whole state as nested tuples: (phase of the coarse-update clock, axes,
-        tags, request queue, held environment events).  The scan counter itself is not
-        state; only its phase decides when the next coarse update comes."""
-        return (
+        tags, request queue, held environment events), and with a ladder program the
+        values of its tag database last.  The scan counter itself is not state; only its
+        phase decides when the next coarse update comes."""
+        snap: tuple[object, ...] = (
             self.index % self.scans_per_update,
             tuple(a.snapshot() for a in self.axes.values()),
             tuple(t.snapshot() for t in self.tags.values()),
             tuple(self.queue),
             tuple((e.axis, e.event) for e in self.held_events),
         )
+        if self.ladder is not None:
+            snap += (self.ladder.db.snapshot(),)
+        return snap
 
     def restore(self, snap: tuple[object, ...]) -> None:
         """Make the system be in a state taken by :meth:`snapshot`."""
-        phase, axes, tags, queue, held = snap
+        phase, axes, tags, queue, held = snap[:5]
+        if self.ladder is not None:
+            self.ladder.db.restore(snap[5])  # type: ignore[arg-type]
         self.index = phase  # type: ignore[assignment]
         for axis, a in zip(self.axes.values(), axes):  # type: ignore[call-overload]
             axis.restore(a)
@@ -303,25 +354,33 @@ class System:
             for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
                 self.queue.remove(name)
                 tag = self.tags[name]
-                if not tag.values.get("pending"):
-                    continue
-                failed = self._first_failure(tag, (ir.Stage.EXECUTE, ir.Stage.MESSAGE))
-                if failed is not None:
-                    self._fail(tag, failed)
-                    continue
-                request = tag.instruction.request
-                if request is not None:
-                    env = self._check_env(tag)
-                    for a in request.actions:
-                        axis.env[a.target.removeprefix("axis.")] = a.value(env)
-                    axis.send(request.event)
-                # the axis answers this request before it processes the next one
-                self._finish(tag)
+                if tag.values.get("pending"):
+                    self._deliver(axis, tag)
             for ev in events:
                 if ev.axis == axis.name:
-                    axis.apply_event_actions(ev.event)
-                    axis.send(ev.event)
+                    self._environment(axis, ev.event)
         self._finish_pending(None)
+
+    def _deliver(self, axis: AxisInstance, tag: TagInstance) -> None:
+        """The axis answers one queued, pending request (step a of the coarse update)."""
+        failed = self._first_failure(tag, (ir.Stage.EXECUTE, ir.Stage.MESSAGE))
+        if failed is not None:
+            self._fail(tag, failed)
+            return
+        request = tag.instruction.request
+        if request is not None:
+            env = self._check_env(tag)
+            for a in request.actions:
+                axis.env[a.target.removeprefix("axis.")] = a.value(env)
+            axis.send(request.event)
+        # the axis answers this request before it processes the next one
+        self._finish(tag)
+
+    @staticmethod
+    def _environment(axis: AxisInstance, event: str) -> None:
+        """One environment event reaches the axis (step b): its actions, then the event."""
+        axis.apply_event_actions(event)
+        axis.send(event)
 
     def _finish_pending(self, axis: str | None) -> None:
         """Finish every delivered, still pending instruction (of one axis, or of all)."""
@@ -351,4 +410,7 @@ class System:
             out[name] = MappingProxyType(tag.observe())
         for name, axis in self.axes.items():
             out[name] = MappingProxyType(axis.observe())
+        if self.ladder is not None:
+            for name, fields in self.ladder.observe().items():
+                out[name] = MappingProxyType(fields)
         return MappingProxyType(out)

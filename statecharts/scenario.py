@@ -12,8 +12,10 @@ expectation failures, each naming the step, the object and the field.
 
 from __future__ import annotations
 
+import difflib
 import json
-from collections.abc import Mapping, Sequence
+import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,7 +24,7 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics, tree_diagnostics
+from statecharts.loader import _plain, bundled_spec_dir, read_document, schema_diagnostics, tree_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -82,7 +84,7 @@ class Mismatch:
 
     def __str__(self) -> str:
         label = f"step {self.step + 1}" + (f" ({self.step_name})" if self.step_name else "")
-        return (f"line {self.line}: {label}, scan {self.scan}: {self.target}.{self.field} "
+        return (f"line {self.line}: {label}, scan {self.scan}: {scan_label(self.target, self.field)} "
                 f"expected {_yaml_value(self.expected)}, got {_yaml_value(self.actual)}")
 
     def located(self, file: str) -> str:
@@ -95,6 +97,13 @@ def _yaml_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return repr(value)
+
+
+def scan_label(obj: str, field: str) -> str:
+    """How an observed value is named: ``mso1.DN``, ``Axis1.state``; program tags ``STATE``, ``Arr[2]``, ``T1.DN``."""
+    if not field:
+        return obj
+    return obj + field if field.startswith("[") else f"{obj}.{field}"
 
 
 def scan_cell(value: object) -> str:
@@ -121,6 +130,12 @@ class ScenarioResult:
     scenario: Scenario
     rows: tuple[ScanRow, ...]
     mismatches: tuple[Mismatch, ...]
+    #: scans run (``len(rows)`` unless the run was asked not to keep its rows)
+    scan_count: int | None = None
+
+    @property
+    def scans(self) -> int:
+        return len(self.rows) if self.scan_count is None else self.scan_count
 
     @property
     def passed(self) -> bool:
@@ -135,39 +150,8 @@ def scenario_schema() -> dict[str, Any]:
 
 
 def _read(path: Path, errors: list[Diagnostic]) -> Any:
-    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML.
-
-    JSON is checked with the json module (its error positions are exact), then read
-    again with the YAML parser, which accepts JSON, to get line numbers for the later
-    diagnostics; should that fail, the JSON tree is used without positions.
-    """
-    if path.suffix != ".json":
-        return read_yaml(path, errors, what="scenario")
-    name = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"cannot read scenario: {exc.strerror or exc}"))
-        return None
-    except UnicodeDecodeError as exc:
-        errors.append(Diagnostic(name, 1, 1, "", f"scenario is not UTF-8 text ({exc.reason} at byte {exc.start})"))
-        return None
-    try:
-        tree = json.loads(text)
-    except json.JSONDecodeError as exc:
-        errors.append(Diagnostic(name, exc.lineno, exc.colno, "", f"JSON syntax error: {exc.msg}"))
-        return None
-    except RecursionError:
-        errors.append(Diagnostic(name, 1, 1, "", "JSON nesting too deep to parse"))
-        return None
-    problems, fatal = tree_diagnostics(name, tree, what="scenario")
-    if problems:
-        errors.extend(problems)
-        return None if fatal else tree
-    positioned = read_yaml(path, [], what="scenario")
-    if positioned is not None and _plain(positioned) == tree:
-        return positioned
-    return tree
+    """Parse a scenario file; a ``.json`` file must be JSON, anything else YAML."""
+    return read_document(path, errors, what="scenario")
 
 
 def _coerce_operand(operand: ir.Operand, value: object) -> object:
@@ -181,13 +165,29 @@ def _coerce_operand(operand: ir.Operand, value: object) -> object:
 def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
     """Read and check a scenario against the spec; raise ScenarioError with every problem."""
     path = Path(path)
-    name = str(path)
     errors: list[Diagnostic] = []
     tree = _read(path, errors)
-    if tree is None:
+    if tree is None or errors:
         if not errors:
-            errors.append(Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
+            errors.append(Diagnostic(str(path), 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`"))
         raise ScenarioError(errors)
+    return _scenario(path, tree, spec)
+
+
+def load_scenario_document(name: str, tree: Any, spec: ir.Spec) -> Scenario:
+    """Check a scenario given as parsed data (a YAML tree or plain dicts and lists), as
+    :func:`load_scenario` checks a file; ``name`` is the file named in diagnostics."""
+    if tree is None:
+        raise ScenarioError([Diagnostic(name, 1, 1, "", f"empty scenario; expected a mapping with `format: {SCENARIO_FORMAT}`")])
+    problems, _fatal = tree_diagnostics(name, tree, what="scenario")
+    if problems:
+        raise ScenarioError(problems)
+    return _scenario(Path(name), tree, spec)
+
+
+def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
+    name = str(path)
+    errors: list[Diagnostic] = []
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
@@ -234,6 +234,9 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
 
+    if isinstance(setup.get("program"), (str, Mapping)):
+        # a ladder program file: docs/programs.md
+        return _load_ladder_scenario(path, tree, doc, spec, err, errors, axes)
     program: list[ProgramEntry] = []
     tag_ins: dict[str, ir.Instruction] = {}
     for i, entry in enumerate(setup.get("program", [])):
@@ -277,8 +280,15 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             if e["event"] not in env_events:
                 err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
+        for key in ("tags", "always"):
+            if key in s:
+                err((*p, key), f"`{key}:` needs a ladder program (setup.program naming a program file)")
         expect: list[tuple[str, str, object]] = []
         for target, fields in s.get("expect", {}).items():
+            if not isinstance(fields, Mapping):
+                err((*p, "expect", target), (f"expected a mapping of observables for {target!r}; a tag path with a "
+                                             f"value needs a ladder program (setup.program naming a program file)"))
+                continue
             if target in tag_ins:
                 allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
             elif target in charts:
@@ -292,6 +302,10 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
             for fname, value in fields.items():
                 if fname not in allowed:
                     err((*p, "expect", target, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
+                    continue
+                problem = _expectation_problem(spec, charts.get(target) if target not in tag_ins else None, fname, value)
+                if problem:
+                    err((*p, "expect", target, fname), f"{target}.{fname}: {problem}")
                 expect.append((target, fname, value))
         line, _ = locate(tree, p)
         steps.append(Step(
@@ -300,6 +314,8 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
                               prescan=bool(s.get("prescan", False))),
             expect=tuple(expect), line=line,
         ))
+    if not any(s.expect for s in steps) and steps:
+        err(("steps",), "no step has `expect:`; a scenario must check at least one observation")
     scan_ms = int(setup.get("scan_ms", 10))
     cu_ms = int(setup.get("coarse_update_ms", scan_ms))
     if cu_ms % scan_ms:
@@ -311,6 +327,74 @@ def load_scenario(path: Path | str, spec: ir.Spec) -> Scenario:
         sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])),
         scan_ms=scan_ms, coarse_update_ms=cu_ms, axes=tuple(axes), program=tuple(program), steps=tuple(steps),
     )
+
+
+#: Value ranges of the Logix integer types of the MOTION_INSTRUCTION members.
+LOGIX_INTEGER_RANGES: dict[str, tuple[int, int]] = {
+    "SINT": (-(2**7), 2**7 - 1), "INT": (-(2**15), 2**15 - 1), "DINT": (-(2**31), 2**31 - 1),
+    "LINT": (-(2**63), 2**63 - 1),
+}
+
+
+def _expectation_problem(spec: ir.Spec, chart: ir.Chart | None, field: str, value: object) -> str | None:
+    """Why ``value`` can never be observed in ``field`` (of a tag when ``chart`` is None)."""
+    if isinstance(value, float) and value != value:
+        return "NaN is never equal to anything; expect a number"
+    if chart is None:
+        if field == "FLAGS":
+            return _integer_problem("DINT", value)
+        member = next((m for m in spec.tag_type.members if m.name == field), None)
+        if member is None:
+            return None
+        if member.type.upper() == "BOOL":
+            return None if isinstance(value, bool) else f"expected true or false, got {_yaml_value(value)}"
+        return _integer_problem(member.type.upper(), value)
+    if field == "state":
+        ids = [st.id for st in chart.leaf_states()]
+        if value in ids:
+            return None
+        hint = difflib.get_close_matches(str(value), ids, n=1, cutoff=0.6)
+        did = f" (did you mean {hint[0]!r}?)" if hint else ""
+        return f"chart {chart.id} has no state {_yaml_value(value)}{did}; states: {', '.join(ids)}"
+    if field == chart.state_attribute:
+        values = sorted({st.value for st in chart.states if st.value is not None})
+        if isinstance(value, bool) or not isinstance(value, int):
+            return f"expected an integer state value, got {_yaml_value(value)}"
+        return None if value in values else f"{value} is not a state value of {chart.id}; values: {', '.join(map(str, values))}"
+    try:
+        var = chart.variable(field)
+    except KeyError:
+        return None
+    return _value_problem(var.type, var.domain, value)
+
+
+def _integer_problem(logix_type: str, value: object) -> str | None:
+    if isinstance(value, bool) or not isinstance(value, int):
+        return f"expected an integer ({logix_type}), got {_yaml_value(value)}"
+    lo, hi = LOGIX_INTEGER_RANGES.get(logix_type, LOGIX_INTEGER_RANGES["DINT"])
+    if not lo <= value <= hi:
+        return f"{value if value.bit_length() <= 128 else 'the integer'} is outside the {logix_type} range [{lo}, {hi}]"
+    return None
+
+
+def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: ir.Spec, err: Any,
+                          errors: list[Diagnostic], axes: list[AxisSetup]) -> Scenario:
+    from statecharts.program.scenario import load_program_scenario
+
+    setup = doc["setup"]
+    for key in ("tags", "prescan"):
+        if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
+            err(("setup", key), f"setup.{key} needs a ladder program")
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
+                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    scan_ms = int(setup.get("scan_ms", 10))
+    cu_ms = int(setup.get("coarse_update_ms", scan_ms))
+    if cu_ms % scan_ms:
+        err(("setup", "coarse_update_ms"), f"coarse_update_ms ({cu_ms}) must be a multiple of scan_ms ({scan_ms})")
+    base = Scenario(file=str(path), name=doc["name"], description=str(doc.get("description", "")),
+                    sources=tuple(doc.get("sources", [])), covers=tuple(doc.get("covers", [])), scan_ms=scan_ms,
+                    coarse_update_ms=cu_ms, axes=tuple(axes), program=(), steps=steps)
+    return load_program_scenario(path, tree, doc, spec, err, errors, base)
 
 
 def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
@@ -338,6 +422,12 @@ def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any
         # any number is allowed (out-of-range values are how checks are exercised); text
         # only when it names a value ("enter as text" names were turned into numbers above)
         textual = isinstance(value, str) and operand.domain is not None and value in operand.domain
+        if isinstance(value, float) and not math.isfinite(value):
+            err((*parts, oname), f"operand {oname} of {ins.id}: {value} is not a finite number")
+            continue
+        if isinstance(value, int) and not isinstance(value, bool) and not -(2**63) <= value < 2**63:
+            err((*parts, oname), f"operand {oname} of {ins.id}: the integer is beyond 64 bits")
+            continue
         if not textual and (isinstance(value, bool) or not isinstance(value, (int, float))):
             names = [k for k, _ in operand.text_values]
             extra = f" or one of: {', '.join(names)}" if names else ""
@@ -363,17 +453,38 @@ def build_system(scenario: Scenario, spec: ir.Spec) -> System:
 def _same(expected: object, actual: object) -> bool:
     if isinstance(expected, bool) or isinstance(actual, bool):
         return expected is actual or (isinstance(expected, bool) and isinstance(actual, bool) and expected == actual)
+    if isinstance(expected, int) and isinstance(actual, int):
+        return expected == actual
     if isinstance(expected, (int, float)) and isinstance(actual, (int, float)):
+        if abs(expected) > 1e300 or abs(actual) > 1e300:  # beyond any REAL: no float() of a huge int
+            return expected == actual
         return abs(float(expected) - float(actual)) <= 1e-9 * max(1.0, abs(float(expected)))
     return expected == actual
 
 
-def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
+def run_scenario(
+    scenario: Scenario, spec: ir.Spec, *, on_row: Callable[[ScanRow], object] | None = None, keep_rows: bool = True,
+) -> ScenarioResult:
     """Run every step; an expression that cannot be evaluated on the scenario's values
-    (e.g. a division by zero) is a ScenarioError naming the step."""
+    (e.g. a division by zero) is a ScenarioError naming the step.
+
+    ``on_row`` sees each scan's row as soon as it is run (a table can be printed while a
+    long scenario runs); with ``keep_rows=False`` the result holds no rows, only what the
+    verdict needs (the latest observations and the mismatches), so a run of a million
+    scans takes constant memory."""
     from statecharts import aoi
+    from statecharts.program.scenario import ProgramScenario, run_program_scenario
+    if isinstance(scenario, ProgramScenario):
+        program_result: ScenarioResult = run_program_scenario(scenario, spec)
+        if on_row is not None:
+            for row in program_result.rows:
+                on_row(row)
+        return program_result
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
+        if on_row is not None:
+            for row in result.rows:
+                on_row(row)
         return result
     try:
         system = build_system(scenario, spec)
@@ -382,6 +493,7 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
+    count, last_index = 0, 0
     for step in scenario.steps:
         for k in range(step.scans):
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
@@ -397,14 +509,20 @@ def run_scenario(scenario: Scenario, spec: ir.Spec) -> ScenarioResult:
                 for fld, val in fields.items()
                 if before.get(obj, {}).get(fld) != val or (obj not in before)
             )
-            rows.append(ScanRow(step.index, step.name, record, changes))
+            row = ScanRow(step.index, step.name, record, changes)
+            count += 1
+            last_index = record.index
+            if keep_rows:
+                rows.append(row)
+            if on_row is not None:
+                on_row(row)
             before = record.observations
         for target, fld, expected in step.expect:
             actual = before[target][fld]
             if not _same(expected, actual):
-                mismatches.append(Mismatch(step.index, step.name, rows[-1].record.index, target, fld,
+                mismatches.append(Mismatch(step.index, step.name, last_index, target, fld,
                                            expected, actual, step.line))
-    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
+    return ScenarioResult(scenario, tuple(rows), tuple(mismatches), None if keep_rows else count)
 
 
 def scenario_files(paths: Sequence[Path | str]) -> list[Path]:

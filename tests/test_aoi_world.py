@@ -113,7 +113,7 @@ def run(w: aoi.World, moves: list[tuple[Any, ...]], rung: bool) -> list[dict[str
     return out
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150)
 @given(st.lists(MOVES, max_size=25), st.lists(MOVES, min_size=1, max_size=25), st.booleans())
 def test_restore_then_the_same_scans_give_the_same_world(before: list[Any], after: list[Any], rung: bool) -> None:
     w = world()
@@ -192,7 +192,7 @@ CIP_EVENTS = ["enable", "disable", "shutdown", "shutdown_reset", "fault_reset", 
               "connection_loss", "connection_established", "run_test"]
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=60)
 @given(st.lists(st.sampled_from(CIP_EVENTS), max_size=30), st.sampled_from(["Running", "Stopped", "Faulted", "Shutdown"]))
 def test_memoised_runner_agrees_with_a_fresh_engine_instance(events: list[str], state: str) -> None:
     chart = MAIN.chart("AxisCIP")

@@ -17,7 +17,6 @@ import dataclasses
 from collections import deque
 from pathlib import Path
 
-import pytest
 
 from checker import mutate
 from checker.model import Model

@@ -497,7 +497,7 @@ def _damaged_scenarios(draw: st.DrawFn) -> str:
     return "".join(lines)
 
 
-@settings(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(suppress_health_check=[HealthCheck.function_scoped_fixture])  # tmp_path is reused on purpose: each example overwrites one file
 @given(text=_damaged_scenarios(), suffix=st.sampled_from([".yaml", ".json"]))
 def test_fuzz_damaged_scenario_raises_only_scenario_error(tmp_path: Path, text: str, suffix: str) -> None:
     path = tmp_path / f"fuzz{suffix}"

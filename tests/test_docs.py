@@ -167,8 +167,12 @@ def test_the_docs_have_examples_of_every_kind() -> None:
 
 @pytest.mark.parametrize("block", SCENARIO_BLOCKS, ids=[b.id for b in SCENARIO_BLOCKS])
 def test_scenario_example_passes(block: Block, spec: ir.Spec, tmp_path: Path) -> None:
-    path = tmp_path / f"{block.file.stem}_{block.line}.yaml"
-    path.write_text(block.text, encoding="utf-8")
+    if block.name:
+        # a named scenario sees the other named files (a program it runs) beside it
+        path = workspace(tmp_path) / block.name
+    else:
+        path = tmp_path / f"{block.file.stem}_{block.line}.yaml"
+        path.write_text(block.text, encoding="utf-8")
     scenario = load_scenario(path, spec)
     result = run_scenario(scenario, spec)
     assert result.passed, f"{block.id}: " + "; ".join(str(m) for m in result.mismatches)

@@ -11,7 +11,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 try:
@@ -30,7 +30,7 @@ from statecharts.expr import (
     parse_expression,
 )
 
-FAST = settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+FAST = settings(max_examples=200)
 
 
 def ev(text: str, env: dict[str, object] | None = None) -> object:
@@ -793,7 +793,7 @@ def test_compiled_closures_agree_with_python(tree: ast.expr, env: dict[str, obje
     assert _same(got, expected), (source, env, got, expected)
 
 
-@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=100)
 @given(st.one_of(num_expr(3), bool_expr(3)), _ENV_VALUES)
 def test_assignment_agrees_with_python(tree: ast.expr, env: dict[str, object]) -> None:
     source = ast.unparse(tree)

@@ -457,7 +457,6 @@ def test_no_instruction_hangs(case: str) -> None:
 QUALITY_SETTINGS = settings(
     max_examples=600,
     stateful_step_count=STEPS,
-    deadline=None,
     database=None,
     derandomize=True,
     verbosity=Verbosity.quiet,

@@ -830,7 +830,7 @@ def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return d
 
 
-@settings(deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@settings(suppress_health_check=[HealthCheck.data_too_large])  # whole spec files are drawn
 @given(mutation=_mutations())
 def test_fuzz_damaged_spec_raises_only_spec_error(fuzz_dir: Path, mutation: tuple[str, bytes]) -> None:
     rel, data = mutation

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, Phase, find, given, settings, strategies as st
+from hypothesis import Phase, find, given, settings, strategies as st
 
 try:
     import statecharts  # noqa: F401
@@ -43,7 +43,7 @@ ENV_WIDE = (*ENV, "shutdown_fault_action", "group_synchronized", "uninhibit", "g
             "device_associated", "connection_established", "dc_bus_up")
 MRHD_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "mrhd"
 #: Exploration looks for one example; shrinking it would only cost time.
-FIND_SETTINGS = settings(max_examples=5000, database=None, deadline=None, phases=[Phase.explicit, Phase.generate])
+FIND_SETTINGS = settings(max_examples=5000, database=None, phases=[Phase.explicit, Phase.generate])
 
 #: What a start state of the wider exploration needs besides a connection and a DC bus
 #: to stay in that state.
@@ -145,7 +145,6 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
     return seen
 
 
-@settings(suppress_health_check=[HealthCheck.too_slow])
 @given(run=st.one_of(_RUN, _RUN_WIDE))
 def test_test_status_is_one_exactly_while_in_process(run: dict[str, object]) -> None:
     _run(run, check_law=True)

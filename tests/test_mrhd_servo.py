@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, find, given, settings, strategies as st
+from hypothesis import find, given, settings, strategies as st
 
 try:
     import statecharts  # noqa: F401
@@ -129,7 +129,6 @@ def _laws(obs: dict[str, dict[str, object]]) -> None:
         assert status in (TIME_OUT, SERVO_FAULT, INCREMENT_FAULT)
 
 
-@settings(suppress_health_check=[HealthCheck.too_slow])
 @given(run=_RUN)
 def test_test_status_is_one_exactly_while_in_process(run: dict[str, object]) -> None:
     _run(run, check_law=True)
@@ -145,7 +144,7 @@ def _final(run: dict[str, object]) -> tuple[dict[str, object], dict[str, object]
 @pytest.mark.parametrize("status", range(6))
 def test_every_test_status_is_found_by_exploration(status: int) -> None:
     found = find(_RUN, lambda r: _final(r)[0].get("TestStatus") == status,
-                 settings=settings(max_examples=5000, database=None, deadline=None, derandomize=True))
+                 settings=settings(max_examples=5000, database=None, derandomize=True))
     axis, tag = _final(found)
     assert axis["TestStatus"] == status
     if status in END_CODE and tag["ER"] and tag["ERR"] in (12, 15) and not tag["IP"]:
@@ -155,7 +154,7 @@ def test_every_test_status_is_found_by_exploration(status: int) -> None:
 @pytest.mark.parametrize("err, exerr", [(12, 1), (12, 12), (12, 16), (13, 2), (8, 0), (11, 0), (15, 0), (20, 0)])
 def test_every_mrhd_error_is_found_by_exploration(err: int, exerr: int) -> None:
     found = find(_RUN, lambda r: (lambda t: t.get("ER") and t.get("ERR") == err and t.get("EXERR") == exerr)(_final(r)[1]),
-                 settings=settings(max_examples=5000, database=None, deadline=None, derandomize=True))
+                 settings=settings(max_examples=5000, database=None, derandomize=True))
     assert (_final(found)[1]["ERR"], _final(found)[1]["EXERR"]) == (err, exerr)
 
 

@@ -34,7 +34,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import given, settings
 from hypothesis import strategies as st
 from statemachine.io import load
 
@@ -108,7 +108,7 @@ def event_sequences(chart: ir.Chart) -> st.SearchStrategy[list[str]]:
     return st.lists(st.sampled_from([e.name for e in chart.events]), max_size=MAX_EVENTS)
 
 
-_SETTINGS = settings(deadline=None, suppress_health_check=[HealthCheck.too_slow])
+_SETTINGS = settings()
 
 
 # --------------------------------------------------------------------------- the property

@@ -218,6 +218,12 @@ schema = {
 }
 NAME_KEY = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
 OBS = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}
+#: a ladder program file (rung text or L5X), relative to the scenario
+PROGRAM_FILE = {"type": "string", "minLength": 1}
+#: program tag values by path (``START_PB``, ``Arr[2]``, ``T1.PRE``)
+TAG_VALUES = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number"]}}
+#: per object its observations; with a program also a tag path with its value (``NEXTSTATE: 1``)
+EXPECT = {"type": "object", "additionalProperties": {"oneOf": [OBS, {"type": ["boolean", "integer", "number", "string"]}]}}
 scenario = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/scenario-1.json",
@@ -244,13 +250,20 @@ scenario = {
                                  "state": {"type": "string"},
                                  "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                              }}},
-                "program": {"type": "array", "items": {
-                    "type": "object", "additionalProperties": False,
-                    "required": ["tag", "instruction", "axis"],
-                    "properties": {
-                        "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
-                        "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
-                    }}},
+                "program": {"oneOf": [
+                    {"type": "array", "items": {
+                        "type": "object", "additionalProperties": False,
+                        "required": ["tag", "instruction", "axis"],
+                        "properties": {
+                            "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
+                            "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                        }}},
+                    PROGRAM_FILE,
+                    {"type": "object", "additionalProperties": False, "required": ["file"],
+                     "properties": {"file": PROGRAM_FILE, "routine": NAME_KEY, "program": NAME_KEY}},
+                ]},
+                "tags": TAG_VALUES,
+                "prescan": {"type": "boolean"},
             },
         },
         "steps": {"type": "array", "minItems": 1, "items": {
@@ -265,7 +278,9 @@ scenario = {
                 "events": {"type": "array", "items": {
                     "type": "object", "additionalProperties": False, "required": ["axis", "event"],
                     "properties": {"axis": NAME_KEY, "event": NAME_KEY}}},
-                "expect": {"type": "object", "additionalProperties": OBS},
+                "expect": EXPECT,
+                "always": EXPECT,
+                "tags": TAG_VALUES,
             }}},
     },
 }
@@ -359,6 +374,11 @@ from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, 
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
+
+# the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
+from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS  # noqa: E402
+
+SCHEMAS.update(CONFORMANCE_SCHEMAS)
 
 if __name__ == "__main__":
     out_dir = Path(__file__).resolve().parent.parent / "spec" / "schema"

@@ -1,0 +1,682 @@
+"""The compiled checker core: states as flat vectors of small integers, scans as table look-ups.
+
+Pipeline position: :mod:`checker.model` (the system, its alphabet and abstractions) ->
+**checker.core** -> :mod:`checker.search`.
+
+A state is a tuple of small integers: the phase of the coarse-update clock, then per
+axis the number of its *axis part* (configuration, chart variables, queued requests,
+held environment events) followed by the number of each of its tags' *tag part*
+(members, rung, operands, response monitors).  The numbers index interning tables of
+exactly the parts :meth:`checker.model.Model.extract` produces, so a state of the core
+decodes to the interpreter's flat state (:meth:`CompiledModel.decode`) and counterexamples
+are replayed by the interpreter unchanged.
+
+A scan is composed of **pieces**, each a pure function of a few numbers and memoised in
+a dict the first time it is needed: a tag's execution-table row, an instruction's
+execution (its checks against its axis), the clock tick of an axis, the finishing of a
+pending instruction, the delivery of a queued request, an environment event, and the
+evaluation of properties and abstractions on a tag or axis after the scan.  A piece is
+computed once by the one implementation of the scan rules (:class:`statecharts.scan.System`
+and :class:`checker.compile.FastAxis`, loaded with just the parts the piece reads), so the
+hot loop never constructs, restores or snapshots chart objects: it is integer and dict
+work only.  Coverage facts (transitions fired, instruction x state cells, error codes)
+are recorded when a piece is first computed: a piece's facts are the same every time it
+runs.
+
+Ordering rules (the same as ``statecharts/scan.py``, ``System.advance`` and
+``System._coarse_update``, written out in ``docs/semantics.md``); :meth:`CompiledModel._block`
+composes the pieces in this order, per axis block:
+
+1. the input change of the scan: a rung raised with its operands, a rung dropped, or an
+   environment event held for the next coarse update;
+2. program: every tag of the axis in program order runs the row of its execution table
+   for its condition (``rung_true`` / ``rung_false``, ``prescan`` on a prescan pass); a
+   row that executes runs the instruction's checks of stage ``execute`` against the
+   axis, and an accepted request moves to the end of the queue;
+3. coarse update (phase 0 of the clock, not on a prescan pass): the axis gets ``tick``;
+   delivered, still pending instructions are finished in program order; the queued
+   requests of the axis are delivered in queue order (all checks again, request
+   actions, request event, finish); the held environment events are applied in order;
+   then every delivered, pending instruction is finished again in program order;
+4. after the scan: properties are evaluated on the concrete parts, then the
+   abstractions (collapse, dead operands, idle-tag retirement) give the stored parts.
+
+Axes do not interact within a scan (a piece reads one tag and its own axis), so each axis
+block is stepped on its own and, on systems of several axes, the step of a block under
+no input is memoised per block.  Symmetry: blocks of interchangeable axes are sorted.
+
+Complexity: one dict look-up per piece per scan once the pieces are known; the tables
+grow with the number of distinct parts, not with the number of states.
+
+Example::
+
+    >>> from statecharts.loader import load_spec
+    >>> from checker.system import load_system, bundled_systems
+    >>> from checker.model import Model
+    >>> spec = load_spec()
+    >>> core = CompiledModel(Model(spec, load_system(bundled_systems()["noncip"], spec)))
+    >>> start = core.initial_states()[0][0]
+    >>> len(core.decode(start)) == len(start)
+    True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from checker.model import Flat, Model
+from checker.properties import Property
+from statecharts.scan import Done, Errored, Executed
+
+#: scan modes of a block
+NORMAL, COARSE, PRESCAN = 0, 1, 2
+#: input kinds of a choice (PRESCAN_PASS applies to every block)
+NOTHING, RAISE, DROP, EVENT, PRESCAN_PASS = 0, 1, 2, 3, 4
+_CONDITIONS = ("rung_false", "rung_true", "prescan")
+
+State = tuple[int, ...]
+_NONE: tuple[Property, ...] = ()
+
+
+@dataclass
+class CoreCoverage:
+    """Coverage facts gathered while pieces are computed (same shape as the search's)."""
+
+    configs: set[tuple[str, frozenset[str]]] = field(default_factory=set)
+    fired: set[tuple[str, str]] = field(default_factory=set)
+    executed: set[tuple[str, str]] = field(default_factory=set)
+    errors: set[tuple[str, int, int]] = field(default_factory=set)
+    values: set[tuple[str, str, object]] = field(default_factory=set)
+
+
+class Intern:
+    """Values <-> dense small integers."""
+
+    __slots__ = ("index", "values")
+
+    def __init__(self) -> None:
+        self.index: dict[Any, int] = {}
+        self.values: list[Any] = []
+
+    def id(self, value: Any) -> int:
+        i = self.index.get(value)
+        if i is None:
+            i = len(self.values)
+            self.index[value] = i
+            self.values.append(value)
+        return i
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+
+class CompiledModel:
+    """The transition system of a :class:`~checker.model.Model` over integer vectors."""
+
+    def __init__(self, model: Model) -> None:
+        self.model = model
+        self.system = model.system
+        self.spu = model.spu
+        self.naxes = len(model.axes)
+        self.width = model.width
+        self.block_start = list(model.block_start)
+        self.block_len = list(model.block_len)
+        self.cores = Intern()  # concrete axis cores: FastAxis snapshots
+        self.parts = Intern()  # abstract axis parts, as Model.extract writes them
+        self.tags = Intern()  # tag parts (values, rung, operands, monitors)
+        self.cov = CoreCoverage()
+        self.tis: list[tuple[int, ...]] = [tuple(t) for t in model.tags_of_axis]
+        self.chart_of = [a.chart.id for a in model.axes]  # type: ignore[attr-defined]
+        fields = model.slots[0].fields if model.slots else ()
+        self._pending_pos = fields.index("pending") if "pending" in fields else -1
+        self.symmetric_groups = [list(g) for g in model.symmetric_groups]
+        self.max_live = model.sysdef.max_live_calls
+        self.has_prescan = model.prescan is not None
+        self.prescan_index = model.prescan.index if model.prescan is not None else -1
+        self.nothing_index = model.nothing.index
+
+        # the alphabet, per axis: (choice index, kind, local tag, argument)
+        local_of = {ti: (s.axis_index, s.local) for ti, s in enumerate(model.slots)}
+        self.raises: list[list[tuple[int, int]]] = [[] for _ in model.slots]  # per tag: (choice, op index)
+        self.raise_ops: list[list[tuple[object, ...]]] = [[] for _ in model.slots]
+        for ti, chs in enumerate(model.raise_choices):
+            for k, c in enumerate(chs):
+                self.raises[ti].append((c.index, k))
+                self.raise_ops[ti].append(tuple(v for _n, v in c.operands))
+        self.drops = [c.index for c in model.drop_choice]
+        axis_no = {name: i for i, (name, _g) in enumerate(model.axis_defs)}
+        self.events: list[tuple[int, int, str]] = []  # (choice, axis, event)
+        for c in model.event_choices:
+            assert c.axis is not None and c.event is not None
+            self.events.append((c.index, axis_no[c.axis], c.event))
+        self.tag_local = local_of
+
+        # per-tag derived facts of tag parts, computed on first use
+        self._rung: list[bool] = []
+        self._pending: list[bool] = []
+        self._live0: list[dict[int, bool]] = [{} for _ in model.slots]
+        # memo tables of the pieces
+        self._rows: list[dict[int, tuple[int, bool]]] = [{} for _ in model.slots]
+        self._exec: list[dict[tuple[int, int], tuple[int, bool]]] = [{} for _ in model.slots]
+        self._finish: list[dict[tuple[int, int], int]] = [{} for _ in model.slots]
+        self._deliver: list[dict[tuple[int, int], tuple[int, int]]] = [{} for _ in model.slots]
+        self._raise: list[dict[tuple[int, int], int]] = [{} for _ in model.slots]
+        self._drop: list[dict[int, int]] = [{} for _ in model.slots]
+        self._tick: list[dict[int, int]] = [{} for _ in model.axes]
+        self._event: list[dict[tuple[int, str], int]] = [{} for _ in model.axes]
+        self._tag_post: list[dict[tuple[int, bool, int], tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
+            {} for _ in model.slots]
+        self._axis_post: list[dict[int, tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
+            {} for _ in model.axes]
+        self._join: list[dict[tuple[int, tuple[int, ...], tuple[str, ...]], int]] = [{} for _ in model.axes]
+        self._split: list[tuple[int, tuple[int, ...], tuple[str, ...]]] = []
+        self._reads_axis = [s.reads_axis for s in model.slots]
+        self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
+        self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
+        self._block_memo: list[dict[tuple[object, ...], tuple[object, ...]]] = [{} for _ in model.axes]
+        self.use_block_memo = self.naxes > 1
+
+    # ------------------------------------------------------------------ interning
+
+    def tag_id(self, part: tuple[object, ...]) -> int:
+        tags = self.tags
+        i = tags.index.get(part)
+        if i is None:
+            i = tags.id(part)
+            self._rung.append(bool(part[1]))
+            pos = self._pending_pos
+            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]
+        return i
+
+    def part_id(self, ai: int, part: tuple[object, ...]) -> int:
+        parts = self.parts
+        i = parts.index.get(part)
+        if i is None:
+            i = parts.id(part)
+            core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
+            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
+            cid = self.chart_of[ai]
+            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
+            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[attr-defined, call-overload]
+                self.cov.values.add((cid, v, x))
+        return i
+
+    def encode_flat(self, flat: Flat) -> State:
+        """The core's state for an interpreter flat state (canonicalised)."""
+        out: list[int] = [flat[0]]  # type: ignore[list-item]
+        for ai in range(self.naxes):
+            start = self.block_start[ai]
+            out.append(self.part_id(ai, flat[start]))  # type: ignore[arg-type]
+            for k in range(1, self.block_len[ai]):
+                out.append(self.tag_id(flat[start + k]))  # type: ignore[arg-type]
+        return self.canonical(out)
+
+    def decode(self, state: Sequence[int]) -> Flat:
+        """The interpreter's flat state for a state of the core."""
+        out: list[object] = [state[0]]
+        for ai in range(self.naxes):
+            start = self.block_start[ai]
+            out.append(self.parts.values[state[start]])
+            for k in range(1, self.block_len[ai]):
+                out.append(self.tags.values[state[start + k]])
+        return tuple(out)
+
+    def canonical(self, vec: list[int]) -> State:
+        """Sort the blocks of each group of interchangeable axes."""
+        for group in self.symmetric_groups:
+            bl = self.block_len[group[0]]
+            if bl == 1:
+                pos = [self.block_start[a] for a in group]
+                vals = sorted(vec[p] for p in pos)
+                for p, v in zip(pos, vals):
+                    vec[p] = v
+            else:
+                blocks = sorted(tuple(vec[self.block_start[a]:self.block_start[a] + bl]) for a in group)
+                for a, blk in zip(group, blocks):
+                    s = self.block_start[a]
+                    vec[s:s + bl] = blk
+        return tuple(vec)
+
+    # ------------------------------------------------------------------ initial states
+
+    def initial_states(self) -> list[tuple[State, tuple[Property, ...], tuple[Property, ...]]]:
+        """(state, violated, reached) per configuration assignment, in assignment order."""
+        out = []
+        for assignment in self.model.assignments:
+            flat, bad, good = self.model.initial(assignment)
+            out.append((self.encode_flat(flat), tuple(bad), tuple(good)))
+        return out
+
+    # ------------------------------------------------------------------ loading (cold path)
+
+    def _load_core(self, ai: int, core: int) -> Any:
+        axis = self.model.axes[ai]
+        axis.restore(self.cores.values[core])  # type: ignore[attr-defined]
+        return axis
+
+    def _load_tag(self, ti: int, tid: int) -> Any:
+        s = self.model.slots[ti]
+        tag = s.tag
+        values, rung, ops, mon = self.tags.values[tid]
+        tag.values.update(zip(s.fields, values))
+        tag.rung = rung
+        tag.operands.update(zip(s.op_names, ops))
+        self.model.monitor_values[ti] = mon
+        return tag
+
+    def _read_tag(self, ti: int) -> int:
+        s = self.model.slots[ti]
+        tag = s.tag
+        return self.tag_id((tuple(tag.values.values()), tag.rung, tuple(tag.operands.values()),
+                            self.model.monitor_values[ti]))
+
+    def _read_core(self, ai: int) -> int:
+        return self.cores.id(self.model.axes[ai].snapshot())  # type: ignore[attr-defined]
+
+    def _begin(self, ai: int) -> None:
+        """Clear the fired-transition and trace records before a piece runs."""
+        self.model.fired[ai].clear()
+        self.model.trace.clear()
+        self.system.trace = self.model.trace
+
+    def _facts(self, ai: int) -> None:
+        """Record the coverage facts of the piece that just ran."""
+        cov = self.cov
+        cid = self.chart_of[ai]
+        for t in self.model.fired[ai]:
+            cov.fired.add((cid, t))
+        for rec in self.model.trace:
+            if type(rec) is Executed:
+                cov.executed.add((self.system.tags[rec.tag].instruction.id, rec.axis_state))
+            elif type(rec) is Errored:
+                cov.errors.add((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
+            elif type(rec) is Done:
+                pass
+        self.system.trace = None
+
+    # ------------------------------------------------------------------ pieces (cold path)
+
+    def rung_of(self, tid: int) -> bool:
+        return self._rung[tid]
+
+    def live0(self, ti: int, tid: int) -> bool:
+        """Live without counting the queue: rung high, pending, or a rise would not execute."""
+        memo = self._live0[ti]
+        v = memo.get(tid)
+        if v is None:
+            s = self.model.slots[ti]
+            values, rung, _ops, _mon = self.tags.values[tid]
+            vals = dict(zip(s.fields, values))
+            v = bool(rung or vals.get("pending") or (s.rise_guard is not None and not s.rise_guard(vals)))
+            memo[tid] = v
+        return v
+
+    def piece_raise(self, ti: int, tid: int, k: int) -> int:
+        s = self.model.slots[ti]
+        values, _rung, ops, mon = self.tags.values[tid]
+        new_ops = dict(zip(s.op_names, ops))
+        new_ops.update(zip((n for n, _v in self.model.raise_choices[ti][k].operands), self.raise_ops[ti][k]))
+        r = self.tag_id((values, True, tuple(new_ops[n] for n in s.op_names), mon))
+        self._raise[ti][(tid, k)] = r
+        return r
+
+    def piece_drop(self, ti: int, tid: int) -> int:
+        values, _rung, ops, mon = self.tags.values[tid]
+        r = self.tag_id((values, False, ops, mon))
+        self._drop[ti][tid] = r
+        return r
+
+    def piece_row(self, ti: int, tid: int, cond: int) -> tuple[int, bool]:
+        """The row's actions (without the execution); whether the row executes."""
+        tag = self._load_tag(ti, tid)
+        row = tag.instruction.table.row(_CONDITIONS[cond])
+        executes = False
+        if row is not None and (row.guard is None or row.guard(tag.values)):
+            tag.run(row.actions)
+            executes = row.execute
+        r = (self._read_tag(ti), executes)
+        self._rows[ti][tid * 3 + cond] = r
+        return r
+
+    def piece_exec(self, ti: int, ai: int, tid: int, core: int) -> tuple[int, bool]:
+        """The instruction executes: checks of stage execute; (tag, accepted)."""
+        self._load_core(ai, core)
+        tag = self._load_tag(ti, tid)
+        system = self.system
+        system.queue = []
+        self._begin(ai)
+        system._execute(tag)
+        self._facts(ai)
+        accepted = tag.name in system.queue
+        system.queue = []
+        r = (self._read_tag(ti), accepted)
+        self._exec[ti][(tid, core)] = r
+        return r
+
+    def piece_finish(self, ti: int, ai: int, tid: int, core: int) -> int:
+        self._load_core(ai, core)
+        tag = self._load_tag(ti, tid)
+        self._begin(ai)
+        self.system._finish(tag)
+        self._facts(ai)
+        r = self._read_tag(ti)
+        self._finish[ti][(tid, core)] = r
+        return r
+
+    def piece_deliver(self, ti: int, ai: int, tid: int, core: int) -> tuple[int, int]:
+        axis = self._load_core(ai, core)
+        tag = self._load_tag(ti, tid)
+        self._begin(ai)
+        self.system._deliver(axis, tag)
+        self._facts(ai)
+        r = (self._read_tag(ti), self._read_core(ai))
+        self._deliver[ti][(tid, core)] = r
+        return r
+
+    def piece_tick(self, ai: int, core: int) -> int:
+        axis = self._load_core(ai, core)
+        self._begin(ai)
+        axis.send("tick")
+        self._facts(ai)
+        r = self._read_core(ai)
+        self._tick[ai][core] = r
+        return r
+
+    def piece_event(self, ai: int, core: int, event: str) -> int:
+        axis = self._load_core(ai, core)
+        self._begin(ai)
+        self.system._environment(axis, event)
+        self._facts(ai)
+        r = self._read_core(ai)
+        self._event[ai][(core, event)] = r
+        return r
+
+    def piece_tag_post(self, ti: int, ai: int, tid: int, queued: bool, core: int) -> tuple[
+            int, tuple[Property, ...], tuple[Property, ...]]:
+        """Properties of a tag after the scan, then its abstract part."""
+        model = self.model
+        if core >= 0:
+            self._load_core(ai, core)
+        self._load_tag(ti, tid)
+        bad: list[Property] = []
+        good: list[Property] = []
+        model.evaluate_tag(ti, queued, {}, bad, good)
+        r = (self.tag_id(model.extract_tag(ti, queued)), tuple(bad), tuple(good))  # type: ignore[arg-type]
+        self._tag_post[ti][(tid, queued, core)] = r
+        return r
+
+    def piece_axis_post(self, ai: int, core: int) -> tuple[int, tuple[Property, ...], tuple[Property, ...]]:
+        """Properties of an axis after the scan, then its collapsed core."""
+        model = self.model
+        self._load_core(ai, core)
+        bad: list[Property] = []
+        good: list[Property] = []
+        model.evaluate_axis(ai, bad, good)
+        snap = self.cores.values[core]
+        values = model.extract_axis_values(ai, snap[1])
+        collapsed = (snap[0], values, *snap[2:])
+        r = (self.cores.id(collapsed), tuple(bad), tuple(good))
+        self._axis_post[ai][core] = r
+        return r
+
+    def join(self, ai: int, core: int, q: tuple[int, ...], h: tuple[str, ...]) -> int:
+        key = (core, q, h)
+        r = self._join[ai].get(key)
+        if r is None:
+            snap = self.cores.values[core]
+            r = self.part_id(ai, (*snap, q, h))
+            self._join[ai][key] = r
+        return r
+
+    # ------------------------------------------------------------------ the scan of one axis block
+
+    def inert(self, ti: int, tid: int) -> bool:
+        """An inert tag takes no part in a scan: rung low, nothing pending, and its
+        rung-false row changes nothing and does not execute."""
+        memo = self._inert[ti]
+        v = memo.get(tid)
+        if v is None:
+            rr = self._rows[ti].get(tid * 3)
+            if rr is None:
+                rr = self.piece_row(ti, tid, 0)
+            v = not self._rung[tid] and not self._pending[tid] and rr == (tid, False)
+            memo[tid] = v
+        return v
+
+    def quiet(self, ti: int, tid: int) -> bool:
+        """An inert tag whose post-scan evaluation is the identity whatever its axis does."""
+        memo = self._quiet[ti]
+        v = memo.get(tid)
+        if v is None:
+            v = False
+            if not self._reads_axis[ti]:
+                p = self._tag_post[ti].get((tid, False, -1))
+                if p is None:
+                    p = self.piece_tag_post(ti, self.model.slots[ti].axis_index, tid, False, -1)
+                v = p == (tid, (), ())
+            memo[tid] = v
+        return v
+
+    def context(self, ai: int, state: Sequence[int]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """(tags that take part in a scan, inert tags whose properties must still be
+        evaluated) of axis ``ai``'s block in ``state``, as local tag numbers."""
+        start = self.block_start[ai] + 1
+        active: list[int] = []
+        watch: list[int] = []
+        for j, ti in enumerate(self.tis[ai]):
+            tid = state[start + j]
+            if not self.inert(ti, tid):
+                active.append(j)
+            elif not self.quiet(ti, tid):
+                watch.append(j)
+        return tuple(active), tuple(watch)
+
+    def _block(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object,
+               active: tuple[int, ...] | None = None, watch: tuple[int, ...] = ()
+               ) -> tuple[int, list[int], list[Property], list[Property]]:
+        """One scan of axis ``ai``'s block: its axis part ``aid`` and tag parts ``tags``
+        (changed in place), in scan mode ``mode``, with local input (``kind``, tag ``k``, ``arg``).
+
+        ``active`` lists the tags that are not inert (None: every tag) and ``watch`` the
+        inert ones whose properties are evaluated; the others are left as they are
+        (:meth:`context`).  A prescan pass always runs every tag."""
+        core, q, h = self._split[aid]
+        tis = self.tis[ai]
+        if active is None or mode == PRESCAN:
+            order: tuple[int, ...] = tuple(range(len(tis)))
+            watch = ()
+        elif kind == RAISE or kind == DROP:
+            order = active if k in active else tuple(sorted((*active, k)))
+            if k in watch:
+                watch = tuple(x for x in watch if x != k)
+        else:
+            order = active
+        if kind == RAISE:
+            ti = tis[k]
+            tid = tags[k]
+            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]
+            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]
+        elif kind == DROP:
+            ti = tis[k]
+            tid = tags[k]
+            r = self._drop[ti].get(tid)
+            tags[k] = r if r is not None else self.piece_drop(ti, tid)
+        elif kind == EVENT:
+            h = (*h, arg)  # type: ignore[assignment]
+        rung = self._rung
+        pending = self._pending
+        rows = self._rows
+        # 2. program, in program order
+        for j in order:
+            ti = tis[j]
+            tid = tags[j]
+            cond = 2 if mode == PRESCAN else (1 if rung[tid] else 0)
+            rr = rows[ti].get(tid * 3 + cond)
+            if rr is None:
+                rr = self.piece_row(ti, tid, cond)
+            tid, executes = rr
+            if executes:
+                ex = self._exec[ti].get((tid, core))
+                if ex is None:
+                    ex = self.piece_exec(ti, ai, tid, core)
+                tid, accepted = ex
+                if accepted:
+                    q = (*(x for x in q if x != j), j)
+            tags[j] = tid
+        # 3. coarse update
+        if mode == COARSE:
+            events = h
+            h = ()
+            t = self._tick[ai].get(core)
+            core = t if t is not None else self.piece_tick(ai, core)
+            finish = self._finish
+            for j in order:
+                tid = tags[j]
+                if pending[tid] and j not in q:
+                    ti = tis[j]
+                    f = finish[ti].get((tid, core))
+                    tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
+            for j in q:
+                tid = tags[j]
+                if pending[tid]:
+                    ti = tis[j]
+                    d = self._deliver[ti].get((tid, core))
+                    if d is None:
+                        d = self.piece_deliver(ti, ai, tid, core)
+                    tags[j], core = d
+            q = ()
+            for ev in events:
+                e = self._event[ai].get((core, ev))
+                core = e if e is not None else self.piece_event(ai, core, ev)
+            for j in order:
+                tid = tags[j]
+                if pending[tid]:
+                    ti = tis[j]
+                    f = finish[ti].get((tid, core))
+                    tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
+        # 4. properties, then abstractions
+        bad: list[Property] = []
+        good: list[Property] = []
+        reads = self._reads_axis
+        posts = self._tag_post
+        for seq in (order, watch):
+            for j in seq:
+                ti = tis[j]
+                tid = tags[j]
+                key = (tid, j in q, core if reads[ti] else -1)
+                p = posts[ti].get(key)
+                if p is None:
+                    p = self.piece_tag_post(ti, ai, tid, key[1], key[2])
+                tags[j] = p[0]
+                if p[1]:
+                    bad.extend(p[1])
+                if p[2]:
+                    good.extend(p[2])
+        ap = self._axis_post[ai].get(core)
+        if ap is None:
+            ap = self.piece_axis_post(ai, core)
+        if ap[1]:
+            bad.extend(ap[1])
+        if ap[2]:
+            good.extend(ap[2])
+        key2 = (ap[0], q, h)
+        aid2 = self._join[ai].get(key2)
+        if aid2 is None:
+            aid2 = self.join(ai, ap[0], q, h)
+        return aid2, tags, bad, good
+
+    # ------------------------------------------------------------------ successors of a state
+
+    def enabled(self, state: State) -> list[tuple[int, int, int, int, object]]:
+        """(choice index, axis, kind, local tag, argument) offered in ``state``, in the
+        interpreter's order (tags in program order, events, nothing, prescan)."""
+        out: list[tuple[int, int, int, int, object]] = []
+        limit = self.max_live
+        rung = self._rung
+        busy_anywhere = False
+        for ai in range(self.naxes):
+            start = self.block_start[ai]
+            _core, q, h = self._split[state[start]]
+            if q or h:
+                busy_anywhere = True
+            tis = self.tis[ai]
+            live_flags = None
+            nlive = 0
+            if limit is not None:
+                live_flags = [self.live0(ti, state[start + 1 + j]) or j in q for j, ti in enumerate(tis)]
+                nlive = sum(live_flags)
+            for j, ti in enumerate(tis):
+                tid = state[start + 1 + j]
+                if rung[tid]:
+                    out.append((self.drops[ti], ai, DROP, j, None))
+                elif limit is None or nlive < limit or (live_flags is not None and live_flags[j]):
+                    for c, kk in self.raises[ti]:
+                        out.append((c, ai, RAISE, j, kk))
+        for c, ai, ev in self.events:
+            out.append((c, ai, EVENT, 0, ev))
+        out.append((self.nothing_index, -1, NOTHING, 0, None))
+        if self.has_prescan and not busy_anywhere:
+            out.append((self.prescan_index, -1, PRESCAN_PASS, 0, None))
+        return out
+
+    def _step_block(self, state: State, ai: int, mode: int, kind: int, k: int, arg: object
+                    ) -> tuple[tuple[int, ...], list[Property], list[Property]]:
+        start = self.block_start[ai]
+        n = self.block_len[ai]
+        if self.use_block_memo:
+            block = state[start:start + n]
+            key = (block, mode, kind, k, arg)
+            memo = self._block_memo[ai]
+            r = memo.get(key)
+            if r is None:
+                aid, tags, bad, good = self._block(ai, state[start], list(state[start + 1:start + n]), mode, kind, k, arg)
+                r = ((aid, *tags), bad, good)
+                if len(memo) > 200_000:
+                    memo.clear()
+                memo[key] = r
+            return r  # type: ignore[return-value]
+        aid, tags, bad, good = self._block(ai, state[start], list(state[start + 1:start + n]), mode, kind, k, arg)
+        return (aid, *tags), bad, good
+
+    def successors(self, state: State) -> list[tuple[int, State, list[Property], list[Property]]]:
+        """(choice index, canonical successor, violated, reached) for every enabled choice."""
+        phase = state[0]
+        mode = COARSE if phase % self.spu == 0 else NORMAL
+        nphase = (phase + 1) % self.spu
+        out = []
+        naxes = self.naxes
+        if naxes == 1:
+            active, watch = self.context(0, state)
+            aid = state[1]
+            tags = state[2:]
+            block = self._block
+            for c, _ai, kind, k, arg in self.enabled(state):
+                if kind == PRESCAN_PASS:
+                    aid2, tags2, bad, good = block(0, aid, list(tags), PRESCAN, NOTHING, 0, None)
+                else:
+                    aid2, tags2, bad, good = block(0, aid, list(tags), mode, kind, k, arg, active, watch)
+                out.append((c, (nphase, aid2, *tags2), bad, good))
+            return out
+        base: list[tuple[tuple[int, ...], list[Property], list[Property]]] = [
+            self._step_block(state, ai, mode, NOTHING, 0, None) for ai in range(naxes)]
+        for c, ai, kind, k, arg in self.enabled(state):
+            if kind == PRESCAN_PASS:
+                blocks = [self._step_block(state, b, PRESCAN, NOTHING, 0, None) for b in range(naxes)]
+            elif kind == NOTHING:
+                blocks = base
+            else:
+                blocks = list(base)
+                blocks[ai] = self._step_block(state, ai, mode, kind, k, arg)
+            vec = [nphase]
+            bad = []
+            good = []
+            for blk, b, g in blocks:
+                vec.extend(blk)
+                if b:
+                    bad.extend(b)
+                if g:
+                    good.extend(g)
+            out.append((c, self.canonical(vec), bad, good))
+        return out

@@ -1,0 +1,386 @@
+"""The conformance suite: vectors, the protocol, the reference adapter and the runner.
+
+The suite built here is a small one (a handful of scenarios and a small system) so that
+these tests stay fast; the whole bundled suite is generated and run by ``make deep``
+(``tests/test_conformance_deep.py``).  Runner robustness is shown against
+``tests/adapters/oracle_adapter.py``, an implementation that answers with the vectors'
+own expectations and misbehaves on request.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import jsonschema
+import pytest
+
+from conformance import runner
+from conformance.adapter import ReferenceAdapter
+from conformance.schemas import MANIFEST_SCHEMA, MESSAGES, VECTOR_SCHEMA
+from conformance.vectors import SYSTEMS_DIR, build_suite, load_vectors, write_suite
+from statecharts.diagnostics import ScenarioError
+from statecharts.loader import load_spec
+from statecharts.scenario import load_scenario
+
+ROOT = Path(__file__).resolve().parent.parent
+ORACLE = Path(__file__).resolve().parent / "adapters" / "oracle_adapter.py"
+SCENARIOS = ["noncip/mso_enable.yaml", "noncip/mso_axis_moving.yaml", "noncip/mdo_enable_delay.yaml",
+             "noncip/exec_prescan.yaml", "noncip/masr_shutdown.yaml", "noncip/fault_action_shutdown.yaml",
+             "cip/cip_power_up_and_enable.yaml", "mrhd/mrhd_servo_preconditions.yaml", "aoi/err_1000_registry_full.yaml"]
+SMALL_SYSTEM = """\
+format: motionchart-system/1
+name: small
+description: one servo axis with five state instructions
+source: "tests"
+scan_ms: 10
+coarse_update_ms: 20
+axes:
+  - name: Axis
+    type: AXIS_SERVO
+    program: [MSO, MSF, MASD, MASR, MAFR]
+    configurations:
+      - {name: servo}
+      - {name: unconfigured, variables: {Configured: false}}
+environment: [servo_fault, fault_cleared, motion_started, motion_stopped]
+max_live_calls: 1
+abstraction:
+  collapse: [ServoOutput, DriveOutputCommand, TestStatus, TestDirectionForward]
+"""
+
+
+@pytest.fixture(scope="module")
+def spec() -> Any:
+    return load_spec()
+
+
+def _build(spec: Any, tmp: Path) -> Any:
+    scen = tmp / "scenarios"
+    for rel in SCENARIOS:
+        (scen / rel).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(ROOT / "scenarios" / rel, scen / rel)
+    system = tmp / "small.yaml"
+    system.write_text(SMALL_SYSTEM, encoding="utf-8")
+    return build_suite(spec, scenarios=[scen], systems=[str(system), str(SYSTEMS_DIR / "cip_unassigned.yaml")])
+
+
+@pytest.fixture(scope="module")
+def suite_dir(spec: Any, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    tmp = tmp_path_factory.mktemp("suite")
+    suite = _build(spec, tmp)
+    out = tmp / "vectors"
+    write_suite(suite, out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def vectors(suite_dir: Path) -> list[dict[str, Any]]:
+    return load_vectors(suite_dir)
+
+
+# --------------------------------------------------------------------------- the vectors
+
+
+def test_every_vector_and_the_manifest_match_their_schemas(suite_dir: Path) -> None:
+    files = sorted(suite_dir.glob("*.json"))
+    assert len(files) > 20
+    for p in files:
+        doc = json.loads(p.read_text(encoding="utf-8"))
+        jsonschema.validate(doc, MANIFEST_SCHEMA if p.name == "manifest.json" else VECTOR_SCHEMA)
+
+
+def test_output_is_byte_identical(spec: Any, suite_dir: Path, tmp_path: Path) -> None:
+    again = tmp_path / "again"
+    write_suite(_build(spec, tmp_path), again)
+    first = {p.name: p.read_bytes() for p in suite_dir.iterdir()}
+    second = {p.name: p.read_bytes() for p in again.iterdir()}
+    assert first.keys() == second.keys()
+    assert [n for n in first if first[n] != second[n]] == []
+
+
+def test_the_add_on_instruction_scenarios_are_left_out_with_the_reason(suite_dir: Path) -> None:
+    manifest = json.loads((suite_dir / "manifest.json").read_text(encoding="utf-8"))
+    assert [x["file"] for x in manifest["left_out"]] == ["aoi/err_1000_registry_full.yaml"]
+    assert "motionchart-aoi-scenario/1" in manifest["left_out"][0]["reason"]
+
+
+def test_a_scenario_vector_carries_the_hand_written_expectations(spec: Any, vectors: list[dict[str, Any]]) -> None:
+    """Every expectation of the scenario file is in the vector, at the scan that ends its step."""
+    by_origin = {v.get("origin"): v for v in vectors}
+    for rel in SCENARIOS[:-1]:
+        scenario = load_scenario(ROOT / "scenarios" / rel, spec)
+        v = by_origin[f"scenarios/{rel}"]
+        scan = -1
+        for step in scenario.steps:
+            scan += step.scans
+            for obj, fld, value in step.expect:
+                got = v["scans"][scan]["expect"][obj][fld]
+                assert got == value and type(got) is type(value) or (
+                    isinstance(value, (int, float)) and not isinstance(value, bool) and abs(got - value) < 1e-9), (rel, scan, obj, fld)
+
+
+def test_the_mso_enable_vector_says_what_the_manual_says(vectors: list[dict[str, Any]]) -> None:
+    """Written from RM002H-p78/79 by hand: MSO on a ready servo axis is done within the
+    scan of the coarse update, with servo action and drive enable on, Servo Control
+    (AxisState 2); EN stays until the rung goes false."""
+    v = next(v for v in vectors if v.get("origin") == "scenarios/noncip/mso_enable.yaml")
+    assert v["requires"]["axis_families"] == ["AxisNonCIP"] and "MSO" in v["requires"]["instructions"]
+    first = next(s for s in v["scans"] if any(s["inputs"]["rungs"].values()))
+    tag = next(t for t, on in first["inputs"]["rungs"].items() if on)
+    assert first["expect"][tag]["EN"] is True and first["index"] > 0
+    assert v["scans"][0]["expect"][tag]["EN"] is False
+    done = next(s for s in v["scans"] if s["expect"][tag]["DN"])
+    axis = v["setup"]["axes"][0]["name"]
+    assert done["expect"][axis]["state"] == "ServoControl" and done["expect"][axis]["AxisState"] == 2
+    assert done["expect"][axis]["ServoActionStatus"] is True and done["expect"][axis]["DriveEnableStatus"] is True
+
+
+def test_generated_vectors_cover_what_the_checker_reaches(spec: Any, vectors: list[dict[str, Any]], tmp_path: Path) -> None:
+    """Every transition, error code, cell and check the search of the small system reaches
+    is covered by a generated vector, and each generated run is a shortest one: no
+    vector of that system is longer than the search's depth + 1."""
+    from checker.model import Model
+    from checker.properties import load_properties
+    from checker.search import explore
+    from checker.system import load_system
+    system = tmp_path / "small.yaml"
+    system.write_text(SMALL_SYSTEM, encoding="utf-8")
+    model = Model(spec, load_system(system, spec), load_properties(spec))
+    result = explore(model, progress=False)
+    gen = [v for v in vectors if v["kind"] == "generated" and v["id"].startswith("small-")]
+    covered: dict[str, set[str]] = {k: set() for k in ("transitions", "error_codes", "cells", "checks")}
+    for v in gen:
+        for k in covered:
+            covered[k].update(v["covers"][k])
+        assert len(v["scans"]) <= result.depth + 1
+    cov = result.coverage
+    assert {f"{c}:{t}" for c, t in cov.fired} <= covered["transitions"]
+    assert {f"{m}@{s}" for m, s in cov.executed} <= covered["cells"]
+    assert {f"{m}.{c}" for m, c in cov.checks} <= covered["checks"]
+    assert len(cov.errors) == len({e for e in covered["error_codes"] if not e.startswith(("MSO_CIP", "MSF_CIP", "MDS", "MRHD", "MAFR_CIP", "MASD_CIP", "MASR_CIP"))})
+
+
+def test_a_generated_error_vector_ends_with_the_documented_code(vectors: list[dict[str, Any]]) -> None:
+    """MSO on an unconfigured axis: ERR 11 Axis Not Configured (domain-facts §1a)."""
+    v = next(v for v in vectors if v["id"] == "small-error-MSO.11")
+    last = v["scans"][-1]["expect"]
+    assert last["Axis_MSO"]["ER"] is True and last["Axis_MSO"]["ERR"] == 11
+    assert v["setup"]["axes"][0]["variables"]["Configured"] is False
+
+
+def test_bad_vector_files_get_located_errors(tmp_path: Path, vectors: list[dict[str, Any]]) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"format": "motionchart-vector/1",\n "id": 3}', encoding="utf-8")
+    with pytest.raises(ScenarioError) as exc:
+        load_vectors(bad)
+    text = str(exc.value)
+    assert "bad.json:" in text and "id" in text
+    broken = tmp_path / "broken.json"
+    broken.write_text('{"format": ', encoding="utf-8")
+    with pytest.raises(ScenarioError, match=r"broken.json:1:12: JSON syntax error"):
+        load_vectors(broken)
+    wrong_tag = dict(vectors[0])
+    wrong_tag["scans"] = [dict(vectors[0]["scans"][0], inputs={"rungs": {"nosuchtag": True}})]
+    p = tmp_path / "tag.json"
+    p.write_text(json.dumps(wrong_tag), encoding="utf-8")
+    with pytest.raises(ScenarioError, match="unknown tag 'nosuchtag'"):
+        load_vectors(p)
+
+
+# --------------------------------------------------------------------------- the protocol and the reference adapter
+
+
+def test_the_reference_adapter_passes_every_vector_in_process(spec: Any, vectors: list[dict[str, Any]]) -> None:
+    result = runner.run(vectors, lambda: runner.InProcessTransport(ReferenceAdapter(spec)))
+    assert [v.line() for v in result.verdicts if v.verdict != "pass"] == []
+    assert result.ok
+
+
+def test_the_reference_adapter_answers_match_the_message_schemas(spec: Any, vectors: list[dict[str, Any]]) -> None:
+    a = ReferenceAdapter(spec)
+    hello = a.handle({"type": "hello", "protocol": "motionchart-conformance/1"})
+    jsonschema.validate(hello, MESSAGES["hello-reply"])
+    v = vectors[0]
+    jsonschema.validate({"type": "reset", "vector": v["id"], "setup": v["setup"]}, MESSAGES["reset"])
+    jsonschema.validate(a.handle({"type": "reset", "vector": v["id"], "setup": v["setup"]}), MESSAGES["ready"])
+    msg = {"type": "scan", "index": 0, "inputs": v["scans"][0]["inputs"]}
+    jsonschema.validate(msg, MESSAGES["scan"])
+    jsonschema.validate(a.handle(msg), MESSAGES["observations"])
+    err = a.handle({"type": "reset", "vector": "x", "setup": {"axes": [{"name": "A", "type": "AXIS_NOPE"}]}})
+    jsonschema.validate(err, MESSAGES["error"])
+    assert "AXIS_NOPE" in err["message"]
+    assert a.handle({"type": "frobnicate"})["type"] == "error"
+    assert a.handle({"type": "bye"}) is None
+
+
+def _conform(*args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "checker", "conform", *args], capture_output=True, text=True,
+                          timeout=timeout, cwd=ROOT)
+
+
+def test_conform_against_motionchart_adapter_passes_and_writes_junit(suite_dir: Path, tmp_path: Path) -> None:
+    junit = tmp_path / "junit.xml"
+    only = ["scenario-noncip", "small-error"]
+    r = _conform("--adapter", f"{sys.executable} -m checker adapter", "--vectors", str(suite_dir),
+                 "--junit", str(junit), "-j", "2", *[x for o in only for x in ("--only", o)])
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[-1].startswith("vectors: ") and " 0 failed, 0 errors, 0 timed out" in lines[-1]
+    assert all(x.startswith("PASS ") for x in lines[:-1]) and len(lines) > 8
+    suite = ET.parse(junit).getroot().find("testsuite")
+    assert suite is not None and suite.get("failures") == "0" and suite.get("errors") == "0"
+    assert int(suite.get("tests", "0")) == len(lines) - 1
+
+
+# --------------------------------------------------------------------------- robustness
+
+
+def _oracle(suite_dir: Path, mode: str) -> str:
+    return f"{sys.executable} {ORACLE} {suite_dir} {mode}"
+
+
+SIX = ["scenario-noncip-mso_enable", "scenario-noncip-mso_axis_moving", "scenario-noncip-exec_prescan",
+       "scenario-noncip-masr_shutdown", "scenario-noncip-fault_action_shutdown", "scenario-noncip-mdo_enable_delay"]
+
+
+def _six(suite_dir: Path, mode: str, *extra: str) -> tuple[subprocess.CompletedProcess[str], dict[str, Any]]:
+    args = ["--adapter", _oracle(suite_dir, mode), "--vectors", str(suite_dir), "--json", "--timeout", "2",
+            *[x for o in SIX for x in ("--only", o)], *extra]
+    r = _conform(*args, timeout=240)
+    doc = json.loads(r.stdout)
+    return r, doc
+
+
+def _verdicts(doc: dict[str, Any]) -> dict[str, str]:
+    return {x["id"]: x["verdict"] for x in doc["results"]}
+
+
+def test_a_well_behaved_implementation_passes(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "good")
+    assert r.returncode == 0 and set(_verdicts(doc).values()) == {"pass"} and len(doc["results"]) == 6
+
+
+def test_an_adapter_that_exits_at_the_third_vector_is_restarted(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "exit3")
+    v = _verdicts(doc)
+    assert r.returncode == 1 and len(v) == 6
+    # the third vector of each adapter's life ends it; the restarted one does the same
+    assert [x["verdict"] for x in doc["results"]] == ["pass", "pass", "error", "pass", "pass", "error"]
+    bad = next(x for x in doc["results"] if x["verdict"] == "error")
+    assert "exited with status 3" in bad["detail"] and "exiting on purpose" in bad["detail"]
+    assert doc["summary"]["error"] == 2 and doc["summary"]["pass"] == 4
+
+
+def test_an_adapter_that_sleeps_forever_times_out_and_the_rest_runs(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "sleep")
+    v = _verdicts(doc)
+    assert r.returncode == 1 and len(v) == 6
+    # the second vector of each adapter's life hangs; each time it is killed and restarted
+    assert [x["verdict"] for x in doc["results"]] == ["pass", "timeout"] * 3
+    bad = next(x for x in doc["results"] if x["verdict"] == "timeout")
+    assert "no answer to scan within 2 s" in bad["detail"] and bad["scan"] == 0
+
+
+def test_an_adapter_that_prints_garbage_is_an_error(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "garbage")
+    assert r.returncode == 1 and [x["verdict"] for x in doc["results"]] == ["pass", "error"] * 3
+    bad = next(x for x in doc["results"] if x["verdict"] == "error")
+    assert "not JSON" in bad["detail"] and "this is not JSON" in bad["detail"]
+
+
+def test_an_adapter_that_floods_its_output_is_cut_off(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "flood", "--max-line", "1000000")
+    assert r.returncode == 1 and [x["verdict"] for x in doc["results"]] == ["pass", "error"] * 3
+    bad = next(x for x in doc["results"] if x["verdict"] == "error")
+    assert "longer than 1,000,000 bytes" in bad["detail"]
+
+
+def test_a_slow_adapter_within_the_time_outs_passes(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "slow", "--only", "small-error-MSO.11")
+    assert r.returncode == 0 and set(_verdicts(doc).values()) == {"pass"}
+
+
+def test_a_vector_time_out_bounds_a_slow_adapter(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "slow", "--vector-timeout", "1")
+    v = _verdicts(doc)
+    assert "timeout" in v.values() and len(v) == 6
+    assert any("longer than 1 s" in x["detail"] for x in doc["results"] if x["verdict"] == "timeout")
+
+
+def test_an_adapter_that_never_answers_hello_ends_with_an_error_per_vector(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "silent", "--startup-timeout", "1")
+    assert r.returncode == 1 and set(_verdicts(doc).values()) == {"error"} and len(doc["results"]) == 6
+    assert "did not answer hello" in doc["results"][0]["detail"]
+
+
+def test_a_wrong_answer_is_a_failure_naming_scan_field_expected_and_actual(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "wrong")
+    fails = [x for x in doc["results"] if x["verdict"] == "fail"]
+    assert r.returncode == 1 and len(fails) >= 5
+    assert {x["verdict"] for x in doc["results"]} <= {"fail", "pass"}
+    f = fails[0]
+    assert f["scan"] == 1 and f["field"] == "DN" and f["expected"] is (not f["actual"])
+    assert f"scan 1" in f["detail"] and f"{f['object']}.DN expected" in f["detail"]
+
+
+def test_an_adapter_error_answer_is_an_error_verdict(suite_dir: Path) -> None:
+    r, doc = _six(suite_dir, "error")
+    assert set(_verdicts(doc).values()) == {"error"}
+    assert "this set-up is not supported" in doc["results"][0]["detail"]
+
+
+# --------------------------------------------------------------------------- known failures, skips
+
+
+def test_known_failures_are_strict(suite_dir: Path, tmp_path: Path) -> None:
+    known = tmp_path / "known.txt"
+    known.write_text("# wrong on purpose\nscenario-noncip-mso_* the adapter inverts DN\n"
+                     "scenario-noncip-masr_shutdown also inverted\n", encoding="utf-8")
+    _r, plain = _six(suite_dir, "wrong")
+    base = _verdicts(plain)
+    listed = {"scenario-noncip-mso_enable", "scenario-noncip-mso_axis_moving", "scenario-noncip-masr_shutdown"}
+    r, doc = _six(suite_dir, "wrong", "--known-failures", str(known))
+    v = _verdicts(doc)
+    want = {i: ({"fail": "xfail", "pass": "xpass"}[base[i]] if i in listed else base[i]) for i in SIX}
+    assert v == want and "xfail" in v.values()
+    assert r.returncode == (0 if set(v.values()) <= {"pass", "xfail"} else 1)
+    r, doc = _six(suite_dir, "good", "--known-failures", str(known))
+    assert r.returncode == 1 and _verdicts(doc)["scenario-noncip-mso_enable"] == "xpass"
+    stale = tmp_path / "stale.txt"
+    stale.write_text("no-such-vector because\n", encoding="utf-8")
+    r, doc = _six(suite_dir, "good", "--known-failures", str(stale))
+    assert r.returncode == 1 and "names no vector" in doc["problems"][0]
+    broken = tmp_path / "broken.txt"
+    broken.write_text("\nscenario-noncip-mso_enable\n", encoding="utf-8")
+    r = _conform("--adapter", _oracle(suite_dir, "good"), "--vectors", str(suite_dir), "--known-failures", str(broken))
+    assert r.returncode == 1 and f"{broken}:2:1: expected `VECTOR-ID REASON`" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_unsupported_families_are_skipped_not_run(spec: Any, vectors: list[dict[str, Any]]) -> None:
+    class NonCipOnly(ReferenceAdapter):
+        def supports(self) -> dict[str, Any]:
+            return {"axis_families": ["AxisNonCIP"], "instructions": ["MSO", "MSF", "MASD", "MASR", "MAFR", "MDO", "MDF"],
+                    "observables": {"tag": ["EN", "DN", "ER", "ERR"], "AxisNonCIP": ["state"]}}
+
+    result = runner.run(vectors, lambda: runner.InProcessTransport(NonCipOnly(spec)))
+    by = {v.id: v for v in result.verdicts}
+    cip = by["scenario-cip-cip_power_up_and_enable"]
+    assert cip.verdict == "skipped" and "unsupported: axis family AxisCIP" in cip.detail
+    mrhd = by["scenario-mrhd-mrhd_servo_preconditions"]
+    assert mrhd.verdict == "skipped" and "instruction MRHD" in mrhd.detail
+    assert by["scenario-noncip-mso_enable"].verdict == "pass"
+    assert result.ok
+
+
+def test_conform_usage_errors(suite_dir: Path) -> None:
+    r = _conform("--adapter", "x", "--vectors", "/no/such/dir")
+    assert r.returncode == 2 and "no such file or directory" in r.stderr
+    r = _conform("--adapter", _oracle(suite_dir, "good"), "--vectors", str(suite_dir), "--only", "zzz-none")
+    assert r.returncode == 2 and "no vector matches" in r.stderr
+    r = _conform("--adapter", "/no/such/program", "--vectors", str(suite_dir), "--only", "small-error-MSO.11")
+    assert r.returncode == 1 and "cannot be started" in r.stdout and "Traceback" not in r.stderr

@@ -391,7 +391,7 @@ def test_svgs_are_reused_while_their_dot_is_unchanged(spec: ir.Spec, tmp_path: P
 
 _SHUTDOWN_MSO = """format: motionchart-scenario/1
 name: MSO on a shut-down axis
-sources: ["domain-facts §4 MSO (RM002H-p79)"]
+sources: ["RM002H p79 (MSO EXERR)"]
 covers: []
 setup:
   axes:
@@ -400,6 +400,8 @@ setup:
     - {tag: mso1, instruction: MSO, axis: Axis1}
 steps:
   - rungs: {mso1: true}
+    expect:
+      mso1: {ER: true, ERR: 12, EXERR: 12}
 """
 
 
@@ -411,7 +413,7 @@ def test_traceability_comes_from_running_the_scenarios(spec: ir.Spec, tmp_path: 
     tr = trace(spec, [root])
     (r,) = tr.runs
     assert r.path == "scenarios/shutdown_mso.yaml" and r.covers == ()
-    # MSO on an axis in Shutdown: ER with ERR 12, EXERR 12 (domain-facts §4 MSO, RM002H-p79)
+    # MSO on an axis in Shutdown: ER with ERR 12, EXERR 12 (RM002H p79)
     assert ("MSO", 12, 12) in r.errors
     assert ("AxisNonCIP", "Shutdown") in r.states
     assert [p.path for p in tr.problems] == ["scenarios/broken.yaml"]

@@ -254,7 +254,7 @@ def test_diagram_to_stdout_is_the_dot_text(spec: ir.Spec) -> None:
 
 def test_diagram_unknown_chart_lists_known_ones() -> None:
     code, out, err = run(["diagram", "NoSuchChart"])
-    assert code == 1 and out == ""
+    assert code == 2 and out == ""  # a usage error, like an unknown system in check
     assert "unknown chart 'NoSuchChart'" in err and "AxisNonCIP" in err and "MSO" in err
     assert "Traceback" not in err
 

@@ -35,8 +35,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import InputError
+from statecharts.inputs import path_argument_problem, shown_name
 
 COMMANDS = ("diagram", "docs", "generate")
 FORMATS = ("dot", "svg", "png", "pdf", "mermaid")

@@ -123,7 +123,7 @@ def _pages(items: list[Any]) -> tuple[tuple[int, int], ...]:
 
 def load_registry(path: Path | str) -> Registry:
     """Read and check one sources file; raise :class:`SourcesError` with located problems."""
-    from statecharts.loader import _plain, read_yaml, schema_diagnostics  # the loader imports this module
+    from statecharts.loader import plain_data as _plain, read_yaml, schema_diagnostics  # the loader imports this module
 
     p = Path(path)
     errors: list[Diagnostic] = []

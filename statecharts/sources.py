@@ -28,8 +28,6 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-import jsonschema
-
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 
 SOURCES_FORMAT = "motionchart-sources/1"
@@ -123,7 +121,8 @@ def _pages(items: list[Any]) -> tuple[tuple[int, int], ...]:
 
 def load_registry(path: Path | str) -> Registry:
     """Read and check one sources file; raise :class:`SourcesError` with located problems."""
-    from statecharts.loader import plain_data as _plain, read_yaml, schema_diagnostics  # the loader imports this module
+    from statecharts.loader import plain_data as _plain  # the loader imports this module
+    from statecharts.loader import read_yaml, schema_diagnostics
 
     p = Path(path)
     errors: list[Diagnostic] = []
@@ -180,7 +179,9 @@ def bundled_registry() -> Registry:
 
 def split_citations(text: str) -> list[str]:
     """The citations of one source text: split at ``;`` outside parentheses."""
-    out, depth, cur = [], 0, []
+    out: list[str] = []
+    depth = 0
+    cur: list[str] = []
     for ch in text:
         if ch in "([":
             depth += 1
@@ -251,10 +252,10 @@ def citation_problem(citation: str, registry: Registry) -> str | None:
                             f"({src.page_text()}); add it to {Path(registry.path).name} if it is really used")
         return None
     if src.locator == "topics":
-        names = {t for t, _ in src.topics}
+        topic_names = {t for t, _ in src.topics}
         for word in (w.strip() for w in bare.split(",")):
-            if word not in names:
-                return f"{word!r} is not a listed topic of {code}; topics: {', '.join(sorted(names))}"
+            if word not in topic_names:
+                return f"{word!r} is not a listed topic of {code}; topics: {', '.join(sorted(topic_names))}"
         return None
     if src.locator == "sections":
         names = [n for n, _ in src.sections]
@@ -323,7 +324,7 @@ def cited_pages(locator: str) -> list[int]:
 def iter_sources(tree: Any) -> list[tuple[tuple[Any, ...], Any]]:
     """(path, value) of every ``source`` text in a YAML tree, and of every item of an
     interpretation's ``evidence`` list (iterative walk)."""
-    out = []
+    out: list[tuple[tuple[Any, ...], Any]] = []
     stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
     while stack:
         node, parts = stack.pop()
@@ -343,7 +344,7 @@ def iter_sources(tree: Any) -> list[tuple[tuple[Any, ...], Any]]:
 
 def interpretation_citations(tree: Any) -> list[tuple[tuple[Any, ...], str]]:
     """(path, INT id) of every interpretation cited inside a ``source:`` text of ``tree``."""
-    out = []
+    out: list[tuple[tuple[Any, ...], str]] = []
     for parts, value in iter_sources(tree):
         if isinstance(value, str):
             for c in split_citations(value):

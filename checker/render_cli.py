@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from statecharts.inputs import path_argument_problem, shown_name
+from statecharts.outputs import replace_folder
 from statecharts.diagnostics import InputError
 
 COMMANDS = ("diagram", "docs", "generate")
@@ -211,7 +212,7 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     docs = load_aoi_documents(args.spec)
     artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=False)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=False))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged); "
@@ -246,7 +247,7 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
         return EXIT_FAIL
     artefacts = build(spec, _scenario_roots(args), out, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=True)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged, "

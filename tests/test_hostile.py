@@ -448,3 +448,38 @@ def test_an_atomic_write_leaves_no_temporary_file_when_interrupted(tmp_path: Pat
 
 def test_assignments_parse_once_and_are_shared() -> None:
     assert parse_assignment("X = 1") is parse_assignment("X = 1")
+
+
+def test_an_interrupted_folder_update_leaves_the_previous_folder(tmp_path: Path) -> None:
+    from statecharts.outputs import replace_folder
+    out = tmp_path / "docs"
+    out.mkdir()
+    (out / "index.md").write_text("old")
+
+    def fill(folder: Path) -> None:
+        (folder / "index.md").write_text("new")
+        (folder / "half.md.tmp").write_text("half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        replace_folder(out, fill)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["docs"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.md"] and (out / "index.md").read_text() == "old"
+
+
+def test_a_completed_folder_update_replaces_the_folder_whole(tmp_path: Path) -> None:
+    from statecharts.outputs import replace_folder
+    out = tmp_path / "docs"
+    out.mkdir()
+    (out / "index.md").write_text("old")
+    (out / "kept.txt").write_text("kept")
+    replace_folder(out, lambda folder: (folder / "index.md").write_text("new"))
+    assert (out / "index.md").read_text() == "new" and (out / "kept.txt").read_text() == "kept"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["docs"]
+
+
+def test_docs_into_an_unwritable_place_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "afile").write_text("")
+    assert main(["docs", "-o", str(tmp_path / "afile" / "docs")]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err

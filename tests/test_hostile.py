@@ -483,3 +483,14 @@ def test_docs_into_an_unwritable_place_is_one_line(tmp_path: Path, capsys: pytes
     assert main(["docs", "-o", str(tmp_path / "afile" / "docs")]) != 0
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_vector_files_go_through_the_safe_reader(tmp_path: Path) -> None:
+    from conformance.vectors import load_vector
+    big = tmp_path / "big.json"
+    big.write_text('{"a": ' + "9" * 5000 + "}")
+    for path, fragment in (("/dev/zero", "character device"), (str(big), "JSON error")):
+        with pytest.raises(ScenarioError) as info:
+            load_vector(path)
+        assert fragment in str(info.value) and ":1:1:" in str(info.value)

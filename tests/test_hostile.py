@@ -494,3 +494,24 @@ def test_vector_files_go_through_the_safe_reader(tmp_path: Path) -> None:
         with pytest.raises(ScenarioError) as info:
             load_vector(path)
         assert fragment in str(info.value) and ":1:1:" in str(info.value)
+
+
+def test_check_on_an_undecided_eventless_loop_is_a_located_error(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import shutil
+
+    from ruamel.yaml import YAML
+    spec = tmp_path / "spec"
+    shutil.copytree(bundled_spec_dir(), spec, ignore=shutil.ignore_patterns("__pycache__", "*.py"))
+    chart_file = spec / "charts" / "axis_noncip.yaml"
+    yaml = YAML(typ="rt")
+    yaml.width = 10**6
+    tree = yaml.load(chart_file.read_text())
+    tree["chart"]["variables"].append({"name": "N", "type": "int", "initial": 0, "source": "test"})
+    tree["chart"]["transitions"].append({"id": "count", "from": "AxisReady", "guard": "N >= 0",
+                                         "actions": ["N = N + 1"], "priority": -9, "source": "test"})
+    with chart_file.open("w") as fh:
+        yaml.dump(tree, fh)
+    assert main(["check", "-q", "--spec", str(spec)]) == 1
+    err = capsys.readouterr().err
+    assert "eventless" in err and "'count'" in err and "axis_noncip.yaml" in err and "Traceback" not in err

@@ -35,7 +35,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from statecharts.inputs import path_argument_problem, shown_name
+from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
 from statecharts.outputs import replace_folder
 from statecharts.diagnostics import InputError
 
@@ -185,6 +185,9 @@ def _scenario_roots(args: argparse.Namespace) -> list[str]:
 def _check_out_dir(out: Path, prog: str) -> int | None:
     if out.exists() and not out.is_dir():
         return _fail(prog, f"{out} exists and is not a directory")
+    problem = output_path_problem(str(out), directory=True)
+    if problem is not None:  # found before the work, not after it
+        return _fail(prog, f"cannot write {shown_name(out)}: {problem}")
     return None
 
 

@@ -89,6 +89,8 @@ class Variable:
     description: str
     provenance: Provenance
     location: Location
+    #: a program may write it (SSV), so a scenario step may ``set:`` it
+    writable: bool = False
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,6 +108,8 @@ class State:
     description: str
     provenance: Provenance
     location: Location
+    #: drive-model values an axis set up in this state has (scenario set-ups apply them)
+    implies: tuple[tuple[str, object], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -77,10 +77,10 @@ CHART_KEYS = frozenset(
      "initial", "transitions"}
 ) | _PROVENANCE
 STATE_KEYS = frozenset(
-    {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states"}
+    {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states", "implies"}
 ) | _PROVENANCE
 TRANSITION_KEYS = frozenset({"id", "from", "to", "event", "guard", "actions", "priority"}) | _PROVENANCE
-VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description"}) | _PROVENANCE
+VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description", "writable"}) | _PROVENANCE
 EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
 INSTRUCTION_KEYS = frozenset(
     {"id", "mnemonic", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
@@ -802,8 +802,31 @@ class _Builder:
             name=v["name"], type=vtype, initial=initial,
             domain=tuple(domain) if domain is not None else None,
             description=str(v.get("description", "")), provenance=self.prov(f, parts, v),
-            location=self.loc(f, parts),
+            location=self.loc(f, parts), writable=bool(v.get("writable", False)),
         )
+
+    def implies(self, f: _File, parts: tuple[Any, ...], given: Any, variables: Sequence[ir.Variable]) -> tuple[tuple[str, object], ...]:
+        """A state's ``implies:``: chart variables and the values a set-up in that state needs."""
+        if not given:
+            return ()
+        by_name = {v.name: v for v in variables}
+        out: list[tuple[str, object]] = []
+        for name, value in given.items():
+            var = by_name.get(name)
+            if var is None:
+                self.error(f, (*parts, name), f"unknown variable {name!r}{_hint(name, by_name)}; variables: {', '.join(by_name)}")
+                continue
+            if var.type == "bool" and not isinstance(value, bool):
+                self.error(f, (*parts, name), f"{name} is a bool: expected true or false, got {value!r}")
+                continue
+            if var.type in ("int", "real") and (isinstance(value, bool) or not isinstance(value, (int, float))):
+                self.error(f, (*parts, name), f"{name} is a number: got {value!r}")
+                continue
+            if var.domain is not None and value not in var.domain:
+                self.error(f, (*parts, name), f"{value!r} is not in the domain of {name}: {list(var.domain)!r}")
+                continue
+            out.append((name, value))
+        return tuple(out)
 
     # -- charts --------------------------------------------------------------
 
@@ -872,6 +895,7 @@ class _Builder:
                     exit=self.actions(f, (*p, "exit"), s.get("exit"), known, var_names),
                     description=str(s.get("description", "")),
                     provenance=self.prov(f, p, s), location=self.loc(f, p),
+                    implies=self.implies(f, (*p, "implies"), s.get("implies"), variables),
                 ))
                 ids.append(sid)
             return ids

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from statecharts import ir
+from statecharts import expectations, ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
@@ -45,6 +45,8 @@ class ProgramEntry:
     instruction: str
     axis: str
     operands: tuple[tuple[str, object], ...]
+    #: MOTION_INSTRUCTION members set before the first scan (``preset:``)
+    preset: tuple[tuple[str, object], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -53,8 +55,12 @@ class Step:
     name: str
     scans: int
     inputs: ScanInputs
-    expect: tuple[tuple[str, str, object], ...]  # (object, field, value)
+    expect: tuple[tuple[str, str, object], ...]  # (object, field, value or expectations.Approx / Not / PassesThrough)
     line: int
+    #: attribute writes before the step's first scan, as SSV does: (axis, variable, value)
+    sets: tuple[tuple[str, str, object], ...] = ()
+    #: with ``within: N`` the step lasts until its expectations hold, at most N scans
+    within: int | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -94,9 +100,7 @@ class Mismatch:
 
 def _yaml_value(value: object) -> str:
     """Spell a value as it is written in a scenario (true/false, not True/False)."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return repr(value)
+    return expectations.yaml_value(value)
 
 
 def scan_label(obj: str, field: str) -> str:
@@ -230,6 +234,10 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             problem = _value_problem(var.type, var.domain, value)
             if problem:
                 err((*p, "variables", vname), f"{vname}: {problem}")
+        if state in startable:
+            # the drive-model values the start state implies (a connected drive with its
+            # DC bus up for a Stopped CIP axis...); the scenario's own values win
+            variables = {**_implied(chart, state), **variables}
         if "AxisType" in {v.name for v in chart.variables}:
             variables.setdefault("AxisType", a["type"])
         axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
@@ -255,7 +263,9 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             ins = next((v for v in variants if charts[entry["axis"]].id in v.charts), variants[0])
         tag_ins[entry["tag"]] = ins
         ops = _operands(ins, entry.get("operands", {}), (*p, "operands"), err)
-        program.append(ProgramEntry(entry["tag"], ins.mnemonic, entry["axis"], tuple(sorted(ops.items()))))
+        preset = _preset(spec, entry.get("preset", {}), (*p, "preset"), err)
+        program.append(ProgramEntry(entry["tag"], ins.mnemonic, entry["axis"], tuple(sorted(ops.items())),
+                                    tuple(preset.items())))
 
     steps: list[Step] = []
     for i, s in enumerate(doc["steps"]):
@@ -300,19 +310,32 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
                                                  f"axes: {', '.join(setup['axes'])}"))
                 continue
             for fname, value in fields.items():
+                if fname == expectations.PASSES_THROUGH and target in charts:
+                    expect.append((target, fname, _passes_through(charts[target], value, (*p, "expect", target, fname), err)))
+                    continue
                 if fname not in allowed:
                     err((*p, "expect", target, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
                     continue
-                problem = _expectation_problem(spec, charts.get(target) if target not in tag_ins else None, fname, value)
+                matcher, problem = expectations.parse(value, numeric=_numeric_observable(spec, charts.get(target), fname))
+                if problem is None and not isinstance(matcher, expectations.Approx):
+                    # a plain value, or the value after `not:`, must be one the observable can take
+                    plain = matcher.value if isinstance(matcher, expectations.Not) else matcher
+                    problem = _expectation_problem(spec, charts.get(target) if target not in tag_ins else None, fname, plain)
                 if problem:
                     err((*p, "expect", target, fname), f"{target}.{fname}: {problem}")
-                expect.append((target, fname, value))
-        line, _ = locate(tree, p)
+                expect.append((target, fname, matcher))
+        line, _ = locate(tree, p) if hasattr(tree, "lc") else (1, 1)
+        sets = _sets(charts, untyped, setup["axes"], s.get("set", {}), (*p, "set"), err)
+        within = s.get("within")
+        if within is not None and "scans" in s:
+            err((*p, "within"), "a step gives either `scans:` (a fixed count) or `within:` (at most that many), not both")
+        if within is not None and not s.get("expect"):
+            err((*p, "within"), "`within:` needs expectations to wait for")
         steps.append(Step(
-            index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)),
+            index=i, name=str(s.get("name", "")), scans=int(within if within is not None else s.get("scans", 1)),
             inputs=ScanInputs(rungs=dict(s.get("rungs", {})), operands=operands, events=tuple(events),
                               prescan=bool(s.get("prescan", False))),
-            expect=tuple(expect), line=line,
+            expect=tuple(expect), line=line, sets=sets, within=int(within) if within is not None else None,
         ))
     if not any(s.expect for s in steps) and steps:
         err(("steps",), "no step has `expect:`; a scenario must check at least one observation")
@@ -385,8 +408,12 @@ def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: i
     for key in ("tags", "prescan"):
         if key in setup and not isinstance(setup.get("program"), (str, Mapping)):
             err(("setup", key), f"setup.{key} needs a ladder program")
-    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("scans", 1)), inputs=ScanInputs(),
-                       expect=(), line=locate(tree, ("steps", i))[0]) for i, s in enumerate(doc["steps"]))
+    charts = {a.name: spec.chart(a.chart) for a in axes}
+    steps = tuple(Step(index=i, name=str(s.get("name", "")), scans=int(s.get("within", s.get("scans", 1))),
+                       inputs=ScanInputs(), expect=(), line=locate(tree, ("steps", i))[0],
+                       sets=_sets(charts, set(), setup["axes"], s.get("set", {}), ("steps", i, "set"), err),
+                       within=int(s["within"]) if "within" in s else None)
+                  for i, s in enumerate(doc["steps"]))
     scan_ms = int(setup.get("scan_ms", 10))
     cu_ms = int(setup.get("coarse_update_ms", scan_ms))
     if cu_ms % scan_ms:
@@ -447,6 +474,7 @@ def build_system(scenario: Scenario, spec: ir.Spec) -> System:
                     scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms)
     for p in scenario.program:
         system.tags[p.tag].operands.update(dict(p.operands))
+        system.tags[p.tag].values.update(dict(p.preset))
     return system
 
 
@@ -493,8 +521,15 @@ def run_scenario(
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
+    visits = _visit_recorders(system, scenario)
     count, last_index = 0, 0
     for step in scenario.steps:
+        for axis, log in visits.items():
+            log.clear()
+            ax = system.axes[axis]
+            log.extend(reversed(ax.chart.ancestors(ax.leaf.id)))
+        for axis, var, value in step.sets:
+            system.axes[axis].env[var] = value
         for k in range(step.scans):
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
             try:
@@ -517,12 +552,141 @@ def run_scenario(
             if on_row is not None:
                 on_row(row)
             before = record.observations
-        for target, fld, expected in step.expect:
-            actual = before[target][fld]
-            if not _same(expected, actual):
-                mismatches.append(Mismatch(step.index, step.name, last_index, target, fld,
-                                           expected, actual, step.line))
+            if step.within is not None and not _step_mismatches(step, before, visits, last_index):
+                break
+        mismatches.extend(_step_mismatches(step, before, visits, last_index))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches), None if keep_rows else count)
+
+
+def _step_mismatches(step: Step, observed: Mapping[str, Mapping[str, object]], visits: Mapping[str, list[str]],
+                     scan: int) -> list[Mismatch]:
+    """The expectations of ``step`` that do not hold on ``observed`` (after scan ``scan``)."""
+    out = []
+    for target, fld, expected in step.expect:
+        if isinstance(expected, expectations.PassesThrough):
+            actual: object = tuple(_leaf_visits(visits.get(target, [])))
+            ok = expectations.passes_through(expected.states, visits.get(target, []))
+        else:
+            actual = observed[target][fld]
+            ok = expectations.holds(expected, actual)
+        if not ok:
+            out.append(Mismatch(step.index, step.name, scan, target, fld, expected, actual, step.line))
+    return out
+
+
+def _leaf_visits(visited: Sequence[str]) -> list[str]:
+    """The visited states without immediate repeats, for a failure message."""
+    out: list[str] = []
+    for v in visited:
+        if not out or out[-1] != v:
+            out.append(v)
+    return out
+
+
+class _VisitRecorder:
+    """A python-statemachine listener that notes each state an axis enters."""
+
+    def __init__(self, log: list[str]) -> None:
+        self.log = log
+
+    def on_enter_state(self, target: Any = None, **_: Any) -> None:
+        if target is not None:
+            self.log.append(str(target.id))
+
+
+def _visit_recorders(system: System, scenario: Scenario) -> dict[str, list[str]]:
+    """For each axis that a ``passes_through`` names, the list its recorder appends to."""
+    wanted = {t for step in scenario.steps for t, _, e in step.expect if isinstance(e, expectations.PassesThrough)}
+    logs: dict[str, list[str]] = {}
+    for axis in sorted(wanted):
+        log: list[str] = []
+        system.axes[axis].machine.add_listener(_VisitRecorder(log))
+        logs[axis] = log
+    return logs
+
+
+def _implied(chart: ir.Chart, state: str) -> dict[str, object]:
+    """The variables a set-up in ``state`` implies: those of its ancestors, then its own,
+    then those of the initial states it starts in (a compound state starts in its
+    initial child)."""
+    chain = list(reversed(chart.ancestors(state)))
+    target = chart.state(state)
+    while target.kind is ir.StateKind.COMPOUND and target.initial is not None:
+        target = chart.state(target.initial)
+        chain.append(target.id)
+    out: dict[str, object] = {}
+    for sid in chain:
+        out.update(dict(chart.state(sid).implies))
+    return out
+
+
+def _preset(spec: ir.Spec, given: Mapping[str, object], parts: tuple[Any, ...], err: Any) -> dict[str, object]:
+    """``preset:`` of a program entry: MOTION_INSTRUCTION members and their first values."""
+    members = {m.name: m for m in spec.tag_type.members}
+    out: dict[str, object] = {}
+    for name, value in given.items():
+        m = members.get(name)
+        if m is None:
+            err((*parts, name), f"{name!r} is not a MOTION_INSTRUCTION member; members: {', '.join(members)}")
+        elif m.type == "BOOL" and not isinstance(value, bool):
+            err((*parts, name), f"{name} is a BOOL: expected true or false, got {value!r}")
+        elif m.type != "BOOL" and (isinstance(value, bool) or not isinstance(value, int)):
+            err((*parts, name), f"{name} is an integer member: got {value!r}")
+        else:
+            out[name] = value
+    return out
+
+
+def _sets(charts: Mapping[str, ir.Chart], untyped: set[str], axes: Mapping[str, Any], given: Mapping[str, Any],
+          parts: tuple[Any, ...], err: Any) -> tuple[tuple[str, str, object], ...]:
+    """``set:`` of a step: attributes a program may write (variables marked ``writable``)."""
+    out: list[tuple[str, str, object]] = []
+    for axis, fields in given.items():
+        chart = charts.get(axis)
+        if chart is None:
+            if axis not in untyped:
+                err((*parts, axis), f"unknown axis {axis!r}; axes: {', '.join(axes)}")
+            continue
+        writable = [v.name for v in chart.variables if v.writable]
+        for vname, value in fields.items():
+            try:
+                var = chart.variable(vname)
+            except KeyError:
+                var = None
+            if var is None or not var.writable:
+                what = "no variable" if var is None else "no writable attribute"
+                err((*parts, axis, vname), f"chart {chart.id} has {what} {vname!r}; a program may write: {', '.join(writable) or '(none)'}")
+                continue
+            problem = _value_problem(var.type, var.domain, value)
+            if problem:
+                err((*parts, axis, vname), f"{vname}: {problem}")
+                continue
+            out.append((axis, vname, value))
+    return tuple(out)
+
+
+def _numeric_observable(spec: ir.Spec, chart: ir.Chart | None, field: str) -> bool:
+    """Whether an observable holds a number (tolerances apply to numbers only)."""
+    if chart is None:
+        member = next((m for m in spec.tag_type.members if m.name == field), None)
+        return field == "FLAGS" or (member is not None and member.type != "BOOL")
+    if field == chart.state_attribute:
+        return True
+    try:
+        return chart.variable(field).type in ("int", "real")
+    except KeyError:
+        return False
+
+
+def _passes_through(chart: ir.Chart, value: object, parts: tuple[Any, ...], err: Any) -> expectations.PassesThrough:
+    states = {s.id for s in chart.states}
+    if not isinstance(value, list) or not value or not all(isinstance(v, str) for v in value):
+        err(parts, "passes_through: expected a non-empty list of state ids")
+        return expectations.PassesThrough(())
+    for j, v in enumerate(value):
+        if v not in states:
+            err((*parts, j), f"chart {chart.id} has no state {v!r}; states: {', '.join(sorted(states))}")
+    return expectations.PassesThrough(tuple(value))
 
 
 def scenario_files(paths: Sequence[Path | str]) -> list[Path]:

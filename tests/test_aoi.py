@@ -97,6 +97,9 @@ def oracle(w: dict[str, Any]) -> tuple[int, int, str]:
             return 1027, 16, "error"
         if not real(phy["position"]):
             return 1027, 13, "error"
+        # then MAG, as for SyncType 1 (003 lists 1023 without a SyncType restriction)
+        if phy["direct_control"]:
+            return 1023, 87, "error"
         return 0, 0, "complete"
     if not phy["homed"]:  # MAH
         if phy["direct_control"]:

@@ -1,18 +1,20 @@
 """MDO numerics, checked against hand-written functions of 002 (MDO):
 
 * the Drive Output is in volts, or in percent of the Output Limit;
-* the output is clamped to +/- Output Limit;
+* the Output Limit bounds the Drive Output when MDO executes: beyond it (in volts) or
+  beyond 100 % MDO errs (002 .ER for a Drive Output too large, INT-011); the output
+  is never beyond +/- Output Limit;
 * a Negative Servo Output Polarity inverts it (002: MDO is affected by the Servo
   Output Polarity bit, INT-051);
 * the 16-bit DAC gives it in steps of 20 V / 65536, about 305 uV (002), truncated
   toward zero so that it never exceeds the limit (INT-052);
 * during the ~500 ms drive-enable delay the output stays at the Output Offset, and DN
   is set when the commanded value is applied (after the delay, at a coarse update);
-  the offset is not added to the applied value (002: "thereafter the output voltage is
-  given by the specified Drive Output value", INT-051);
+  the offset is not added to the applied value (002: once the delay is over, the
+  Drive Output operand alone sets the output, INT-051);
 * lowering the Output Limit below the applied output clamps it (002), at the next
   coarse update (INT-053);
-* a Drive Output beyond 10 V (or 100 %) is an error (13, EXERR 2: INT-011); a negative
+* a Drive Output beyond the Output Limit (or 100 %) is an error (13, EXERR 2); a negative
   Output Limit is refused with 12/3 (INT-054); MDF returns the output to the Output
   Offset (domain-facts §4 MDF).
 
@@ -96,7 +98,7 @@ def _applied(system: System) -> dict[str, object]:
     coarse_ms=st.sampled_from([10, 20, 50, 100, 125, 250, 500]),
 )
 def test_mdo_output_units_clamp_and_delay(units: int, fraction: float, limit: float, offset: float, coarse_ms: int) -> None:
-    drive_output = fraction * (10.0 if units == 0 else 100.0)
+    drive_output = fraction * (limit if units == 0 else 100.0)
     system = _system(coarse_ms, limit, offset, drive_output, units)
     n = math.ceil(DELAY_MS / coarse_ms)
     obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
@@ -122,7 +124,7 @@ def test_mdo_output_units_clamp_and_delay(units: int, fraction: float, limit: fl
 def test_mdo_output_with_polarity_offset_and_dac(units: int, drive_output: float, limit: float, offset: float,
                                                  polarity: str) -> None:
     if units == 0:
-        drive_output = drive_output / 10.0  # within the 10 V range of Volts
+        drive_output = drive_output / 100.0 * limit  # within the Output Limit (INT-011)
     system = _system(100, limit, offset, drive_output, units, polarity)
     first = system.scan(ScanInputs(rungs={"mdo": True})).observations
     # during the enable delay: the Output Offset as configured, not inverted (INT-051)
@@ -171,7 +173,7 @@ def test_negative_output_limit_is_refused_with_12_3(limit: float, units: int) ->
 
 
 def test_zero_output_limit_is_valid_and_holds_zero_volts() -> None:
-    system = _system(100, 0.0, 0.0, 5.0, 0)
+    system = _system(100, 0.0, 0.0, 50.0, 1)
     out = _applied(system)
     assert out["mdo"]["DN"] is True and out["A"]["ServoOutput"] == 0.0
 
@@ -186,13 +188,25 @@ def test_mdf_returns_the_output_to_the_output_offset(drive_output: float, offset
     assert obs["A"]["DriveEnableStatus"] is False and obs["A"]["ServoOutput"] == offset
 
 
-@given(units=st.sampled_from([0, 1]), excess=st.floats(1.0001, 100.0, allow_nan=False), sign=st.sampled_from([-1, 1]))
-def test_mdo_drive_output_too_large_errs(units: int, excess: float, sign: int) -> None:
-    drive_output = sign * excess * (10.0 if units == 0 else 100.0)
-    system = _system(10, 10.0, 0.0, drive_output, units)
+@given(units=st.sampled_from([0, 1]), excess=st.floats(1.0001, 100.0, allow_nan=False), sign=st.sampled_from([-1, 1]),
+       limit=st.floats(0.5, 10.0, allow_nan=False))
+def test_mdo_drive_output_too_large_errs(units: int, excess: float, sign: int, limit: float) -> None:
+    drive_output = sign * excess * (limit if units == 0 else 100.0)
+    system = _system(10, limit, 0.0, drive_output, units)
     obs = system.scan(ScanInputs(rungs={"mdo": True})).observations
     assert (obs["mdo"]["ER"], obs["mdo"]["ERR"], obs["mdo"]["EXERR"]) == (True, 13, 2)
     assert obs["A"]["AxisState"] == 0
+
+
+@given(units=st.sampled_from([0, 1]), drive_output=st.floats(-200.0, 200.0, allow_nan=False),
+       limit=st.floats(0.0, 10.0, allow_nan=False))
+def test_mdo_13_2_exactly_when_the_drive_output_exceeds_the_limit(units: int, drive_output: float, limit: float) -> None:
+    # 002 .ER: a Drive Output that is too large; the bound is the Output Limit in volts and
+    # 100 % in percent (002 Description, INT-011)
+    too_large = abs(drive_output) > (limit if units == 0 else 100.0)
+    obs = _system(10, limit, 0.0, drive_output, units).scan(ScanInputs(rungs={"mdo": True})).observations
+    assert ((obs["mdo"]["ERR"], obs["mdo"]["EXERR"]) == (13, 2)) is too_large
+    assert obs["mdo"]["ER"] is too_large
 
 
 @given(units=st.integers(2, 1000), drive_output=st.floats(-100.0, 100.0, allow_nan=False))

@@ -138,8 +138,16 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
             # Hookup Test Status is 1 exactly while the test is in process (IP)
             assert (a["HookupTestStatus"] == 1) == bool(t["IP"]), obs
             assert 0 <= a["HookupTestStatus"] <= 6
-            # a test in process runs in Starting or Testing with the power structure on
-            assert a["HookupTestStatus"] != 1 or (a["state"] in ("Starting", "Testing") and a["PowerStructureEnabled"])
+            # 001 Testing: a Run Test service that needs the power structure runs through
+            # Starting and Testing with it on (the motor/encoder and commutation tests);
+            # 000: the encoder and marker tests make no motion and only watch the
+            # feedback, on a servo axis in Stopped or a feedback-only one (INT-073)
+            if a["HookupTestStatus"] == 1:
+                if run["test"] in (0, 3):
+                    assert a["state"] in ("Starting", "Testing") and a["PowerStructureEnabled"], obs
+                else:
+                    assert a["state"] == ("Running" if run["feedback_only"] else "Stopped"), obs
+                    assert not a["PowerStructureEnabled"] and not a["DriveEnableStatus"], obs
             # PC and DN together; IP never with DN, PC or ER
             assert bool(t["PC"]) == bool(t["DN"]) and not (t["IP"] and (t["DN"] or t["ER"]))
     return seen
@@ -180,7 +188,7 @@ PRECONDITION_FAILURES = {
     ("Shutdown", 12, 12): "Shutdown (Object Mode conflict)",
     ("Stopped", 13, 2): "Diagnostic Test outside 0-3 (third operand)",
     ("Stopped", 8, 0): "commutation test on an induction motor",
-    ("Running", 8, 0): "feedback-only axis",
+    ("Running", 8, 0): "motor/encoder or commutation test on a feedback-only axis",
     ("Faulted", 20, 0): "faulted",
     ("Aborting", 20, 0): "aborting a major fault",
     ("Stopped", 20, 0): "safety fault latched",

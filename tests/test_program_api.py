@@ -74,8 +74,42 @@ def test_controller_errors() -> None:
     c = Controller(SEQUENCE, axes={"Axis1": "AXIS_CIP_DRIVE"}, spec=SPEC)
     with pytest.raises(KeyError, match="set by its instruction"):
         c.write("MSO_1.DN", True)
+    with pytest.raises(KeyError, match="not an environment event of AxisCIP"):
+        c.scan(events=(("Axis1", "servo_fault"),))
     snap = c.snapshot()
     c.scan(START_PB=True)
     assert c.read("START_PB") is True
     c.restore(snap)
     assert c.read("START_PB") is False
+
+
+def _rungs(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "p.txt"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_axis_members_are_read_and_unknown_ones_refused(tmp_path: Path) -> None:
+    path = _rungs(tmp_path, "XIC(X_axis.ShutdownStatus)OTE(Down);EQU(X_axis.CIPAxisState,10)OTE(InTen);"
+                            "XIC(Reset)MASR(X_axis,masr1);")
+    c = Controller(load_program(path, spec=SPEC), axes={"X_axis": {"type": "AXIS_CIP_DRIVE", **CIP_STARTS["Shutdown"]}},
+                   spec=SPEC)
+    c.scan()
+    assert (c.read("Down"), c.read("InTen")) == (True, True)  # CIPAxisState 10 is Shutdown (RM003I-p236)
+    c.scan(Reset=True).scan()
+    assert (c.read("Down"), c.read("InTen"), c.read("masr1.DN")) == (False, False, True)
+    bad = _rungs(tmp_path, "XIC(X_axis.NoSuchBit)OTE(B);MOV(1,X_axis.CIPAxisState);MASR(X_axis,masr1);")
+    with pytest.raises(ProgramError) as info:
+        Controller(load_program(bad, spec=SPEC), axes={"X_axis": "AXIS_CIP_DRIVE"}, spec=SPEC)
+    text = "\n".join(str(d) for d in info.value.diagnostics)
+    assert "rung 0: instruction 1: X_axis.NoSuchBit: axis X_axis (AxisCIP) has no readable member 'NoSuchBit'" in text
+    assert "rung 1: instruction 1: X_axis.CIPAxisState: axis members are read-only in the model" in text
+
+
+def test_motion_operands_are_evaluated_when_scanned(tmp_path: Path) -> None:
+    path = _rungs(tmp_path, "XIC(Go)MDO(Axis1,mdo1,Level,Volts);")
+    c = Controller(load_program(path, spec=SPEC), axes={"Axis1": "AXIS_SERVO"}, spec=SPEC)
+    c.write("Level", 2)  # a DINT: the drive output comes from the tag as the rung is scanned
+    c.scan(Go=True)
+    assert c.read("mdo1.EN") is True
+    assert c.read("Axis1.DriveOutputCommand") == 2

@@ -69,7 +69,8 @@ REQUIRED_COVERS = (
     "MDO.range.percent_err13_2",
     "MDO.units.err13_3",
     "MDO.units.percent_of_output_limit",
-    "MDO.output.clamp_to_output_limit",
+    "MDO.drive_output_range.beyond_output_limit",  # INT-011: the Output Limit bounds the Drive Output
+    "MDO.drive_output_range.at_output_limit",
     # MDO timing and aborts
     "MDO.timing.enable_delay",
     "MDO.timing.output_offset_during_delay",

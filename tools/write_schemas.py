@@ -20,6 +20,7 @@ variable = {
         "domain": {"type": "array", "items": SCALAR, "minItems": 1},
         "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
         "initial": SCALAR, "description": {"type": "string"},
+        "writable": {"type": "boolean", "description": "A program may write this attribute (SSV): a scenario step may `set:` it."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -34,6 +35,8 @@ state = {
         "description": {"type": "string"},
         "entry": ACTIONS, "exit": ACTIONS,
         "states": {"type": "array", "items": {"$ref": "#/$defs/state"}},
+        "implies": {"type": "object", "additionalProperties": SCALAR,
+                    "description": "Values of chart variables that an axis set up in this state (or a descendant) has, e.g. a connected drive with its DC bus up."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -217,7 +220,17 @@ schema = {
     "$defs": {"state": state},
 }
 NAME_KEY = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
-OBS = {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}
+EXPECTED = {"oneOf": [
+    {"type": ["boolean", "integer", "number", "string"]},
+    {"type": "object", "additionalProperties": False, "required": ["approx", "within"],
+     "description": "A number within a tolerance: a number at least 0, or a named tolerance such as dac_step.",
+     "properties": {"approx": {"type": "number"}, "within": {"type": ["number", "string"]}}},
+    {"type": "object", "additionalProperties": False, "required": ["not"],
+     "description": "Any value but this one.", "properties": {"not": {"type": ["boolean", "integer", "number", "string"]}}},
+    {"type": "array", "minItems": 1, "items": {"type": "string"},
+     "description": "passes_through: states the axis is in during the step, in this order."},
+]}
+OBS = {"type": "object", "additionalProperties": EXPECTED}
 #: a ladder program file (rung text or L5X), relative to the scenario
 PROGRAM_FILE = {"type": "string", "minLength": 1}
 #: program tag values by path (``START_PB``, ``Arr[2]``, ``T1.PRE``)
@@ -257,6 +270,8 @@ scenario = {
                         "properties": {
                             "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
                             "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                            "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
+                                       "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
                         }}},
                     PROGRAM_FILE,
                     {"type": "object", "additionalProperties": False, "required": ["file"],
@@ -272,6 +287,10 @@ scenario = {
                 "name": {"type": "string"},
                 "prescan": {"type": "boolean"},
                 "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
+                "within": {"type": "integer", "minimum": 1, "maximum": 100000,
+                           "description": "The step lasts until its expectations hold, at most this many scans."},
+                "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                        "description": "Attribute writes before the step's first scan, as SSV does: {axis: {attribute: value}}."},
                 "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
                 "operands": {"type": "object", "additionalProperties": {
                     "type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}}},

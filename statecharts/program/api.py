@@ -83,6 +83,13 @@ class Controller:
 
     def scan(self, scans: int = 1, *, events: tuple[tuple[str, str], ...] = (), **writes: Scalar) -> Controller:
         """Write ``writes`` to program tags, then run ``scans`` scans (environment ``events`` in the first)."""
+        for axis, event in events:
+            if axis not in self.system.axes:
+                raise KeyError(f"no axis {axis!r}; axes: {', '.join(self.system.axes)}")
+            chart = self.system.axes[axis].chart
+            known = [ev.name for ev in chart.events if ev.kind == "environment"]
+            if event not in known:
+                raise KeyError(f"{event!r} is not an environment event of {chart.id}; expected one of: {', '.join(known)}")
         inputs = ScanInputs(writes=writes, events=tuple(EnvironmentEvent(a, e) for a, e in events))
         for _ in range(scans):
             self.last = self.system.scan(inputs)

@@ -34,8 +34,9 @@ from statecharts.program.ir import AXIS_UNTYPED, Program
 from statecharts.program.ladder import Ladder, ProgramFault
 from statecharts.program.reader import load_program
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
-from statecharts.scenario import (AxisSetup, Mismatch, Scenario, ScanRow, ScenarioResult, Step, _same,
-                                  _value_problem)
+from statecharts import expectations
+from statecharts.scenario import (AxisSetup, Mismatch, Scenario, ScanRow, ScenarioResult, Step, _numeric_observable,
+                                  _passes_through, _step_mismatches, _value_problem, _visit_recorders)
 
 Expectation = tuple[str, str, object]  # (observation object, field, value)
 
@@ -125,10 +126,18 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
                                        value, (*parts, fname)))
                 return out
             for fname, value in fields.items():
+                if fname == expectations.PASSES_THROUGH and target in charts:
+                    out.append((target, fname, _passes_through(charts[target], value, (*parts, fname), err)))
+                    continue
                 if fname not in allowed:
                     err((*parts, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
                     continue
-                out.append((target, fname, value))
+                # tolerances and `not:` as in every scenario (docs/scenarios.md)
+                matcher, problem = expectations.parse(value, numeric=_numeric_observable(spec, charts.get(target), fname))
+                if problem:
+                    err((*parts, fname), f"{target}.{fname}: {problem}")
+                    continue
+                out.append((target, fname, matcher))
             return out
         if target in paths:
             obj, fld = paths[target]
@@ -173,7 +182,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
         steps.append(ProgramStep(
             index=i, name=old.name, scans=old.scans,
             inputs=ScanInputs(events=tuple(events), prescan=bool(s.get("prescan", False)), writes=dict(writes)),
-            expect=tuple(expect), line=old.line, always=tuple(always)))
+            expect=tuple(expect), line=old.line, always=tuple(always), sets=old.sets, within=old.within))
     if errors:
         raise ScenarioError(errors)
     return ProgramScenario(
@@ -206,8 +215,15 @@ def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec) -> Scena
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
+    visits = _visit_recorders(system, scenario)
     for step in scenario.steps:
         assert isinstance(step, ProgramStep)
+        for axis, log in visits.items():
+            log.clear()
+            ax = system.axes[axis]
+            log.extend(reversed(ax.chart.ancestors(ax.leaf.id)))
+        for axis, var, value in step.sets:
+            system.axes[axis].env[var] = value
         for k in range(step.scans):
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
             try:
@@ -226,13 +242,11 @@ def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec) -> Scena
             before = record.observations
             for target, fld, expected in step.always:
                 actual = before[target][fld]
-                if not _same(expected, actual):
+                if not expectations.holds(expected, actual):
                     mismatches.append(Mismatch(step.index, step.name, record.index, target, fld, expected, actual,
                                                step.line))
-        for target, fld, expected in step.expect:
-            actual = before[target][fld]
-            if not _same(expected, actual):
-                mismatches.append(Mismatch(step.index, step.name, rows[-1].record.index, target, fld,
-                                           expected, actual, step.line))
+            if step.within is not None and not _step_mismatches(step, before, visits, record.index):
+                break
+        mismatches.extend(_step_mismatches(step, before, visits, rows[-1].record.index))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
 

@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate bench install deps-system lint clean
+.PHONY: check test deep generate bench install deps-system deps-node lint lint-run clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	@$(BIN)/python -c "import statecharts, checker, motionchart_spec"
 	@touch $(STAMP)
 
-install: $(STAMP) deps-system
+install: $(STAMP) deps-system deps-node
 
 # Graphviz's `dot` renders diagrams: Debian's package when we are root, else the
 # graphviz-pure wheel (no root needed). Never fatal: text artefacts need no binary.
@@ -27,6 +27,16 @@ deps-system:
 	      || $(BIN)/python -m pip install --quiet graphviz-pure 2>&1 | grep -v "^WARNING: Location" || true; \
 	  else \
 	    $(BIN)/python -m pip install --quiet graphviz-pure 2>&1 | grep -v "^WARNING: Location" || true; \
+	  fi; \
+	fi
+
+# Node.js runs the example implementation of examples/adapters/ in the conformance tests:
+# Debian's package when we are root; without it those tests are skipped with the reason.
+deps-node:
+	@if ! command -v node >/dev/null 2>&1 && ! command -v nodejs >/dev/null 2>&1; then \
+	  if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing nodejs (apt-get)"; \
+	    (apt-get update -qq >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs >/dev/null 2>&1) || true; \
 	  fi; \
 	fi
 
@@ -46,16 +56,34 @@ generate: install
 # Checker speed against a hand-written reference BFS (prints figures; not a test).
 bench: install
 	@$(BIN)/python benchmarks/bench.py
+	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
+	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors
 
-# Longer property-based runs than CI affords.
+# What make test leaves out: every parametrisation of the long explorations (make test
+# runs a fast sample of them), longer property-based runs, the larger checks.
 deep: install
+	@$(BIN)/python -m pytest -m deep
 	@$(BIN)/python tests/fuzzing.py --specs 10000 --scenarios 10000 --systems 1000 --properties 1000
 	@HYPOTHESIS_PROFILE=deep $(BIN)/python -m pytest tests/test_laws.py
 	@$(BIN)/motionchart check --system cip
 	@$(BIN)/motionchart check --system aoi --max-changes 3
+	@$(BIN)/motionchart vectors -o .deep/vectors
+	@$(BIN)/motionchart conform --adapter "$(BIN)/motionchart adapter" --vectors .deep/vectors -q -j 2
+	@if command -v node >/dev/null 2>&1; then $(BIN)/motionchart conform --adapter "node examples/adapters/node/noncip.js" \
+	  --vectors .deep/vectors -q --known-failures examples/adapters/node/known-failures.txt; \
+	  else echo "node not found: the JavaScript example implementation is not run"; fi
 
+# ruff (rules in pyproject.toml) and mypy --strict (statecharts/, checker/, conformance/, motionchart/); fails on
+# any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
+# sources with planted defects).
 lint: install
-	@$(BIN)/python -m pyflakes statecharts checker tests 2>/dev/null || true
+	@$(MAKE) --no-print-directory lint-run
+
+lint-run:
+	@status=0; \
+	$(BIN)/python -m ruff check --no-cache . || status=1; \
+	$(BIN)/python -m mypy || status=1; \
+	exit $$status
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis build *.egg-info
+	rm -rf $(VENV) .pytest_cache .hypothesis .mypy_cache .ruff_cache build *.egg-info .bench .deep

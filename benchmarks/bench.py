@@ -3,12 +3,16 @@
 Run with ``make bench`` (or ``.venv/bin/python benchmarks/bench.py``); no arguments.
 
 1. Every bundled system (``spec/systems/*.yaml``) is checked once with the bundled
-   properties: states, transitions, seconds, states per second.
+   properties: states, transitions, wall and CPU seconds, states per second (of
+   each), and the bytes each stored state takes (visited set, packed states, BFS list,
+   parent, choice and depth columns).  The machine may be shared: CPU seconds are
+   what one core spent, wall seconds include waiting for it.
 2. The scaled model: N interchangeable five-state axes (``benchmarks/five_state/``:
    the documented five-state model of ``shared/reference/tooling-notes.md`` §5 written
    as a chart, without the cross-axis interlock, which a per-axis chart cannot state),
-   N = 1, 3, 6, 9.  The checker explores it through the whole pipeline (IR
-   interpreter, scan semantics, symmetry reduction, compact visited set); the
+   N = 1, 3, 6, 9, 12.  The checker explores it through the whole pipeline (the
+   compiled core of ``checker/core.py``, its pieces computed on first use by the scan
+   semantics and the IR interpreter, symmetry reduction, packed visited set); the
    reference is a minimal breadth-first search over tuples written by hand below from
    the five-state model, with the same symmetry reduction (sorted tuples) and the same
    count of transitions (distinct successors, the stutter step included).  Both must
@@ -30,13 +34,14 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from checker.coverage import table as coverage_table  # noqa: E402
 from checker.model import Model  # noqa: E402
 from checker.properties import load_properties  # noqa: E402
-from checker.search import explore  # noqa: E402
+from checker.search import explore, stored_bytes  # noqa: E402
 from checker.system import bundled_systems, load_system  # noqa: E402
 from statecharts.loader import bundled_spec_dir, load_spec  # noqa: E402
 
-SIZES = (1, 3, 6, 9)
+SIZES = (1, 3, 6, 9, 12)
 RUNS = 5
 FIVE_STATE = Path(__file__).resolve().parent / "five_state"
 
@@ -64,7 +69,7 @@ def reference_bfs(n: int) -> tuple[int, int]:
         succ = {s}  # a scan in which nothing changes
         for i, local in enumerate(s):
             for tgt in MOVES[local]:
-                succ.add(tuple(sorted(s[:i] + (tgt,) + s[i + 1:])))
+                succ.add(tuple(sorted((*s[:i], tgt, *s[i + 1:]))))
         transitions += len(succ)
         for t in succ:
             if t not in parent:
@@ -77,30 +82,39 @@ def reference_bfs(n: int) -> tuple[int, int]:
 
 
 def timed(fn):  # type: ignore[no-untyped-def]
-    t0 = time.perf_counter()
+    """(result, CPU seconds of this process): the machine is shared, wall time is noisy."""
+    t0 = time.process_time()
     out = fn()
-    return out, time.perf_counter() - t0
+    return out, time.process_time() - t0
 
 
 def main() -> int:
     spec = load_spec()
     props = load_properties(spec)
     print("bundled systems (bundled properties, one run each)")
-    print(f"{'system':<16} {'states':>9} {'transitions':>12} {'depth':>6} {'seconds':>8} {'states/s':>9}  verdict")
+    print(f"{'system':<14} {'states':>9} {'transitions':>12} {'depth':>6} {'wall s':>7} {'cpu s':>7} "
+          f"{'states/s':>9} {'st/cpu-s':>9} {'B/state':>8}  verdict")
     for name, path in bundled_systems().items():
         model = Model(spec, load_system(path, spec), props)
+        c0 = time.process_time()
         r = explore(model, progress=False, max_seconds=240)
+        cpu = time.process_time() - c0
         bad = sorted(r.violations)
         verdict = "complete" if r.complete else f"INCOMPLETE ({r.stop_reason})"
         if bad:
             verdict += f", violated: {', '.join(bad)}"
-        print(f"{name:<16} {r.states:>9,} {r.transitions:>12,} {r.depth:>6} {r.seconds:>8.2f} "
-              f"{r.states_per_second:>9,.0f}  {verdict}")
+        per_state = stored_bytes(r) / max(r.states, 1)
+        print(f"{name:<14} {r.states:>9,} {r.transitions:>12,} {r.depth:>6} {r.seconds:>7.2f} {cpu:>7.2f} "
+              f"{r.states_per_second:>9,.0f} {r.states / max(cpu, 1e-9):>9,.0f} {per_state:>8.0f}  {verdict}")
+        for what in ("states", "transitions", "error_codes", "cells"):
+            t = coverage_table(r, what)
+            print(f"{'':<14} coverage {what}: {len(t.reached)}/{t.total}")
 
     bench_spec = load_spec([bundled_spec_dir(), FIVE_STATE / "chart.yaml"])
     base = load_system(FIVE_STATE / "system.yaml", bench_spec)
     print()
-    print(f"scaled five-state model, N non-CIP axes (median of {RUNS} runs)")
+    print(f"scaled five-state model, N non-CIP axes (median of {RUNS} runs, CPU seconds; each checker run "
+          "starts from empty tables)")
     print(f"{'N':>3} {'states':>7} {'transitions':>12} {'checker s':>10} {'checker st/s':>13} "
           f"{'reference s':>12} {'reference st/s':>15} {'ratio':>6}")
     ratios = []

@@ -50,7 +50,7 @@ def routine(rungs: int = 200) -> str:
             f"CPT(R[{k}],R[{k}]*0.5+Count);",
             f"EQU(State,{i % 10})MOV({i},Next);",
         ][i % 8])
-    for n, axis in enumerate(AXES):
+    for _n, axis in enumerate(AXES):
         out.append(f"XIC(Run)MSO({axis},{axis}_STAT[0]);")
         out.append(f"XIO(Run)MSF({axis},{axis}_STAT[1]);")
     return "\n".join(out) + "\n"

@@ -35,11 +35,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-from checker.search import _progress_wanted
-from statecharts.aoi import _obj
+from checker.search import progress_wanted
+from statecharts.aoi import schema_object
 from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
 from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
-from statecharts.loader import _plain, read_yaml, schema_diagnostics
+from statecharts.loader import plain_data, read_yaml, schema_diagnostics
 
 AOI_SYSTEM_FORMAT = "motionchart-aoi-system/1"
 PROGRESS_EVERY = 2000
@@ -54,7 +54,7 @@ AOI_SYSTEM_SCHEMA: dict[str, Any] = {
     "$id": "https://motionchart.invalid/schema/aoi-system-1.json",
     "description": "A world for exploring an add-on instruction: setup, the inputs and environment "
                    "fields the explorer may change, invariants, goals and explained gaps.",
-    **_obj(["format", "name", "source", "setup", "instance", "properties"], {
+    **schema_object(["format", "name", "source", "setup", "instance", "properties"], {
         "format": {"const": AOI_SYSTEM_FORMAT},
         "name": _ID,
         "description": {"type": "string"},
@@ -63,10 +63,10 @@ AOI_SYSTEM_SCHEMA: dict[str, Any] = {
         "instance": _ID,
         "inputs": {"type": "object", "additionalProperties": _VALUES},
         "environment": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _VALUES}},
-        "properties": {"type": "array", "minItems": 1, "items": _obj(["id", "always", "source"], {
+        "properties": {"type": "array", "minItems": 1, "items": schema_object(["id", "always", "source"], {
             "id": _ID, "always": {"type": "string", "minLength": 1}, "description": {"type": "string"},
             "source": _SOURCE, "interpretation": {"type": "string", "pattern": "^INT-[0-9]{3}$"}})},
-        "goals": {"type": "array", "items": _obj(["id", "when", "source"], {
+        "goals": {"type": "array", "items": schema_object(["id", "when", "source"], {
             "id": _ID, "when": {"type": "string", "minLength": 1}, "description": {"type": "string"},
             "source": _SOURCE})},
         "unreached": {"type": "object", "additionalProperties": {"type": "string", "minLength": 1}},
@@ -160,7 +160,7 @@ def load_aoi_system(path: Path | str, spec: Any) -> AoiSystem:
         for d in exc.diagnostics:
             errors.append(Diagnostic(f, *locate(tree, ("setup",)), d.path, d.message) if d.line == 1 else d)
         raise AoiSystemError(errors) from None
-    doc = _plain(tree)
+    doc = plain_data(tree)
     setup = doc["setup"]
     inst = doc["instance"]
     if inst not in setup.get("aoi", {}):
@@ -341,14 +341,15 @@ def explore_aoi(system: AoiSystem, spec: Any, *, max_states: int | None = None, 
     """Breadth-first search of every reachable (world, rung) state of the system."""
     from statecharts.aoi import build_world
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     start = time.monotonic()
     world = build_world(spec, system.setup)
     rung0 = False
     snaps: list[Any] = [world.snapshot()]
     budgets: list[int | None] = [system.max_changes]
     index: dict[tuple[Any, bool, int | None], int] = {(snaps[0], rung0, system.max_changes): 0}
-    rungs, parents, moves, depths = [rung0], [-1], [None], [0]
+    moves: list[Move | None] = [None]
+    rungs, parents, depths = [rung0], [-1], [0]
     verdicts = [Verdict(p, True) for p in system.properties]
     codes = tuple(sorted(code for code, _name in spec.errors))
     rstates = tuple(s.id for s in spec.states)

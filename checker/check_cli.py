@@ -13,7 +13,7 @@ import argparse
 import json
 import sys
 from pathlib import Path
-from typing import TextIO
+from typing import Any, NoReturn, TextIO
 
 from statecharts.diagnostics import InputError
 
@@ -52,8 +52,8 @@ def _axis_count(text: str) -> int:
     return value
 
 
-def register(subparsers: argparse._SubParsersAction) -> argparse.ArgumentParser:  # type: ignore[type-arg]
-    p = subparsers.add_parser(
+def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentParser:
+    p: argparse.ArgumentParser = subparsers.add_parser(
         "check", help="model-check a system: properties, counterexamples, coverage",
         description="Explore every reachable state of a system (spec/systems/*.yaml) and check the "
                     "properties (spec/properties/*.yaml). Exit 0: all hold; 1: a violation; 3: incomplete.")
@@ -84,12 +84,12 @@ def dispatch(args: argparse.Namespace) -> int | None:
 
 
 def run(args: argparse.Namespace, out: TextIO) -> int:
+    from checker.compile import DivergenceError
     from checker.model import Model, ModelError
     from checker.properties import load_properties
     from checker.report import build_report, text
     from checker.search import explore
     from checker.system import bundled_systems, load_system
-    from checker.compile import DivergenceError
     from statecharts.expr import EvalError
     from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
     from statecharts.loader import load_spec
@@ -194,7 +194,7 @@ def _expression_site(props: object, spec: object, text: str) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Stand-alone entry (``python -m checker.check_cli``), for use before the main CLI wires ``check``."""
     class _P(argparse.ArgumentParser):
-        def error(self, message: str) -> None:  # type: ignore[override]
+        def error(self, message: str) -> NoReturn:
             self.print_usage(sys.stderr)
             print(f"{self.prog}: error: {message}", file=sys.stderr)
             raise SystemExit(EXIT_USAGE)

@@ -18,12 +18,12 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn, TextIO
 
 from checker import check_cli, render_cli
 from conformance import cli as conformance_cli
-from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.diagnostics import Diagnostic, InputError
+from statecharts.inputs import path_argument_problem, shown_name
 from statecharts.loader import load_spec
 from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scan_label, scenario_files
 
@@ -33,7 +33,7 @@ EXIT_USAGE = 2
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # type: ignore[override]
+    def error(self, message: str) -> NoReturn:
         self.print_usage(sys.stderr)
         print(f"{self.prog}: error: {message}", file=sys.stderr)
         raise SystemExit(EXIT_USAGE)
@@ -112,7 +112,7 @@ def _run_command(args: argparse.Namespace) -> int:
     if args.command == "simulate":
         return _simulate(args, sys.stdout)
     for extension in (check_cli, render_cli, conformance_cli):
-        code = extension.dispatch(args)
+        code: int | None = extension.dispatch(args)
         if code is not None:
             return code
     return EXIT_USAGE

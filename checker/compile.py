@@ -43,11 +43,13 @@ Example::
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
+from typing import cast
 
 from statecharts import ir
 from statecharts.engine import chart_event_actions, initial_env
+from statecharts.expr import Assignment
 
 #: Most eventless microsteps after one event before the chart is declared divergent.
 MAX_EVENTLESS_STEPS = 100
@@ -70,8 +72,8 @@ class CompiledTransition:
     actions: tuple[Action, ...]
 
 
-def _actions(assignments: tuple[object, ...]) -> tuple[Action, ...]:
-    return tuple((a.target, a.value.fn) for a in assignments)  # type: ignore[attr-defined]
+def _actions(assignments: Iterable[Assignment]) -> tuple[Action, ...]:
+    return tuple((a.target, a.value.fn) for a in assignments)
 
 
 class CompiledChart:
@@ -103,13 +105,14 @@ class CompiledChart:
         self.variables = tuple(v.name for v in chart.variables)
         indexed = sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0]))
         table: dict[tuple[str, str | None], list[CompiledTransition]] = {}
-        self.transitions: list[CompiledTransition] = [None] * len(chart.transitions)  # type: ignore[list-item]
+        by_index: dict[int, CompiledTransition] = {}
         for i, t in indexed:
             ct = CompiledTransition(
                 i, t.id, t.source, t.target, t.event, t.guard.fn if t.guard is not None else None, _actions(t.actions)
             )
-            self.transitions[i] = ct
+            by_index[i] = ct
             table.setdefault((t.source, t.event), []).append(ct)
+        self.transitions: list[CompiledTransition] = [by_index[i] for i in range(len(chart.transitions))]
         self.by_source_event = {k: tuple(v) for k, v in table.items()}
         self.event_actions = {k: _actions(v) for k, v in chart_event_actions(chart).items()}
         self._configs: dict[frozenset[str], frozenset[str]] = {}
@@ -255,7 +258,7 @@ class CompiledChart:
         return tuple(sorted(enter, key=self.doc.__getitem__))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def compiled(chart: ir.Chart) -> CompiledChart:
     return CompiledChart(chart)
 
@@ -360,12 +363,12 @@ class FastAxis:
         return self.config, values
 
     def restore(self, snap: tuple[object, ...]) -> None:
-        self.config = self.c.intern(snap[0])  # type: ignore[arg-type]
+        self.config = self.c.intern(cast("frozenset[str]", snap[0]))
         env = self.env
-        for v, value in zip(self.c.variables, snap[1]):  # type: ignore[call-overload]
+        for v, value in zip(self.c.variables, cast("tuple[object, ...]", snap[1])):
             env[v] = value
         if self.c.has_history:
-            self.history = dict(snap[2]) if len(snap) > 2 else {}  # type: ignore[arg-type]
+            self.history = dict(cast("tuple[tuple[str, frozenset[str]], ...]", snap[2])) if len(snap) > 2 else {}
 
     # -- run-to-completion ----------------------------------------------------------
 

@@ -62,7 +62,7 @@ Example::
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -77,6 +77,10 @@ NOTHING, RAISE, DROP, EVENT, PRESCAN_PASS = 0, 1, 2, 3, 4
 _CONDITIONS = ("rung_false", "rung_true", "prescan")
 
 State = tuple[int, ...]
+#: a block's step under no input: (block, violated, reached)
+BlockStep = tuple[tuple[int, ...], list["Property"], list["Property"]]
+#: the moves of a block's own choices: (choice, block, violated, reached)
+Moves = list[tuple[int, tuple[int, ...], list["Property"], list["Property"]]]
 _NONE: tuple[Property, ...] = ()
 
 
@@ -128,7 +132,7 @@ class CompiledModel:
         self.tags = Intern()  # tag parts (values, rung, operands, monitors)
         self.cov = CoreCoverage()
         self.tis: list[tuple[int, ...]] = [tuple(t) for t in model.tags_of_axis]
-        self.chart_of = [a.chart.id for a in model.axes]  # type: ignore[attr-defined]
+        self.chart_of = [a.chart.id for a in model.axes]
         fields = model.slots[0].fields if model.slots else ()
         self._pending_pos = fields.index("pending") if "pending" in fields else -1
         self.symmetric_groups = [list(g) for g in model.symmetric_groups]
@@ -172,11 +176,46 @@ class CompiledModel:
             {} for _ in model.axes]
         self._join: list[dict[tuple[int, tuple[int, ...], tuple[str, ...]], int]] = [{} for _ in model.axes]
         self._split: list[tuple[int, tuple[int, ...], tuple[str, ...]]] = []
+        self._busy: list[bool] = []  # per axis part: requests queued or events held
         self._reads_axis = [s.reads_axis for s in model.slots]
+        self._axis_names = [tuple(sorted({n for p in (*s.inv, *s.reach, *s.monitors) for n in p.names()
+                                          if n.startswith("axis.")})) for s in model.slots]
+        # tags whose properties read the same axis names (on the same axis) share views
+        shared: dict[tuple[object, ...], tuple[dict[int, int], Intern, list[int]]] = {}
+        self._view: list[dict[int, int]] = []
+        self._views: list[Intern] = []
+        self._view_core: list[list[int]] = []
+        for ti, sl in enumerate(model.slots):
+            v = shared.setdefault((sl.axis_index, self._axis_names[ti]), ({}, Intern(), []))
+            self._view.append(v[0])
+            self._views.append(v[1])
+            self._view_core.append(v[2])
         self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
+        self._watch_memo: list[dict[tuple[tuple[int, ...], int], tuple[tuple[int, ...], tuple[Property, ...],
+                                                                  tuple[Property, ...]]]] = [{} for _ in model.axes]
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
-        self._block_memo: list[dict[tuple[object, ...], tuple[object, ...]]] = [{} for _ in model.axes]
+        self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
+        self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
+        # blocks of interchangeable axes share their move tables (the leader's choices)
+        self._leader = list(range(self.naxes))
+        self._remap: list[dict[int, int]] = [{} for _ in model.axes]
+        self._remap_back: list[dict[int, int]] = [{} for _ in model.axes]
+        for group in self.symmetric_groups:
+            lead = group[0]
+            for ai in group[1:]:
+                own = self._alphabet(ai)
+                theirs = self._alphabet(lead)
+                if len(own) != len(theirs):
+                    continue
+                self._leader[ai] = lead
+                self._remap[ai] = dict(zip(theirs, own))
+                self._remap_back[ai] = dict(zip(own, theirs))
+        self.canonical_fast = self._canonical_function()
+        self._group_of = [-1] * self.naxes
+        for g, group in enumerate(self.symmetric_groups):
+            for ai in group:
+                self._group_of[ai] = g
 
     # ------------------------------------------------------------------ interning
 
@@ -197,20 +236,21 @@ class CompiledModel:
             i = parts.id(part)
             core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
             self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
+            self._busy.append(bool(part[-2] or part[-1]))
             cid = self.chart_of[ai]
             self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
-            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[attr-defined, call-overload]
+            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
                 self.cov.values.add((cid, v, x))
         return i
 
     def encode_flat(self, flat: Flat) -> State:
         """The core's state for an interpreter flat state (canonicalised)."""
-        out: list[int] = [flat[0]]  # type: ignore[list-item]
+        out: list[int] = [flat[0]]
         for ai in range(self.naxes):
             start = self.block_start[ai]
-            out.append(self.part_id(ai, flat[start]))  # type: ignore[arg-type]
+            out.append(self.part_id(ai, flat[start]))
             for k in range(1, self.block_len[ai]):
-                out.append(self.tag_id(flat[start + k]))  # type: ignore[arg-type]
+                out.append(self.tag_id(flat[start + k]))
         return self.canonical(out)
 
     def decode(self, state: Sequence[int]) -> Flat:
@@ -223,8 +263,30 @@ class CompiledModel:
                 out.append(self.tags.values[state[start + k]])
         return tuple(out)
 
+    def _alphabet(self, ai: int) -> list[int]:
+        """Choice numbers of axis ``ai``'s own inputs, in a fixed order."""
+        out: list[int] = []
+        for ti in self.tis[ai]:
+            out.append(self.drops[ti])
+            out.extend(c for c, _k in self.raises[ti])
+        out.extend(c for c, a, _e in self.events if a == ai)
+        return out
+
+    def _canonical_function(self) -> Callable[[list[int]], State]:
+        """The canonicalisation for this layout: nothing to do without symmetry, a plain
+        sort when the axes are one group of one-slot blocks, else :meth:`canonical`."""
+        groups = self.symmetric_groups
+        if not groups:
+            return tuple
+        if (len(groups) == 1 and len(groups[0]) == self.naxes and self.block_len[groups[0][0]] == 1):
+            def one_group(vec: list[int]) -> State:
+                return (vec[0], *sorted(vec[1:]))
+            return one_group
+        return self.canonical
+
     def canonical(self, vec: list[int]) -> State:
-        """Sort the blocks of each group of interchangeable axes."""
+        """Sort the blocks of each group of interchangeable axes (``vec`` is not changed)."""
+        vec = list(vec)
         for group in self.symmetric_groups:
             bl = self.block_len[group[0]]
             if bl == 1:
@@ -253,7 +315,7 @@ class CompiledModel:
 
     def _load_core(self, ai: int, core: int) -> Any:
         axis = self.model.axes[ai]
-        axis.restore(self.cores.values[core])  # type: ignore[attr-defined]
+        axis.restore(self.cores.values[core])
         return axis
 
     def _load_tag(self, ti: int, tid: int) -> Any:
@@ -273,7 +335,7 @@ class CompiledModel:
                             self.model.monitor_values[ti]))
 
     def _read_core(self, ai: int) -> int:
-        return self.cores.id(self.model.axes[ai].snapshot())  # type: ignore[attr-defined]
+        return self.cores.id(self.model.axes[ai].snapshot())
 
     def _begin(self, ai: int) -> None:
         """Clear the fired-transition and trace records before a piece runs."""
@@ -297,9 +359,6 @@ class CompiledModel:
         self.system.trace = None
 
     # ------------------------------------------------------------------ pieces (cold path)
-
-    def rung_of(self, tid: int) -> bool:
-        return self._rung[tid]
 
     def live0(self, ti: int, tid: int) -> bool:
         """Live without counting the queue: rung high, pending, or a rise would not execute."""
@@ -393,18 +452,33 @@ class CompiledModel:
         self._event[ai][(core, event)] = r
         return r
 
-    def piece_tag_post(self, ti: int, ai: int, tid: int, queued: bool, core: int) -> tuple[
+    def view(self, ti: int, ai: int, core: int) -> int:
+        """The number of what tag ``ti``'s properties read of its axis (the ``axis.X``
+        names) in axis core ``core``: cores that look the same to them share it."""
+        names = self._axis_names[ti]
+        axis = self._load_core(ai, core)
+        env = axis.expression_env()
+        seen = tuple(env.get(n) for n in names)
+        views = self._views[ti]
+        v = views.index.get(seen)
+        if v is None:
+            v = views.id(seen)
+            self._view_core[ti].append(core)
+        self._view[ti][core] = v
+        return v
+
+    def piece_tag_post(self, ti: int, ai: int, tid: int, queued: bool, view: int) -> tuple[
             int, tuple[Property, ...], tuple[Property, ...]]:
         """Properties of a tag after the scan, then its abstract part."""
         model = self.model
-        if core >= 0:
-            self._load_core(ai, core)
+        if view >= 0:
+            self._load_core(ai, self._view_core[ti][view])
         self._load_tag(ti, tid)
         bad: list[Property] = []
         good: list[Property] = []
         model.evaluate_tag(ti, queued, {}, bad, good)
-        r = (self.tag_id(model.extract_tag(ti, queued)), tuple(bad), tuple(good))  # type: ignore[arg-type]
-        self._tag_post[ti][(tid, queued, core)] = r
+        r = (self.tag_id(model.extract_tag(ti, queued)), tuple(bad), tuple(good))
+        self._tag_post[ti][(tid, queued, view)] = r
         return r
 
     def piece_axis_post(self, ai: int, core: int) -> tuple[int, tuple[Property, ...], tuple[Property, ...]]:
@@ -463,15 +537,35 @@ class CompiledModel:
         """(tags that take part in a scan, inert tags whose properties must still be
         evaluated) of axis ``ai``'s block in ``state``, as local tag numbers."""
         start = self.block_start[ai] + 1
+        q = self._split[state[start - 1]][1]
         active: list[int] = []
         watch: list[int] = []
         for j, ti in enumerate(self.tis[ai]):
             tid = state[start + j]
-            if not self.inert(ti, tid):
+            if j in q or not self.inert(ti, tid):
                 active.append(j)
             elif not self.quiet(ti, tid):
                 watch.append(j)
         return tuple(active), tuple(watch)
+
+    def _watch_post(self, ai: int, watch: tuple[int, ...], tags: list[int], core: int) -> tuple[
+            tuple[int, ...], tuple[Property, ...], tuple[Property, ...]]:
+        out: list[int] = []
+        bad: list[Property] = []
+        good: list[Property] = []
+        for j in watch:
+            ti = self.tis[ai][j]
+            tid = tags[j]
+            view = self._view[ti].get(core) if self._reads_axis[ti] else -1
+            if view is None:
+                view = self.view(ti, ai, core)
+            p = self._tag_post[ti].get((tid, False, view))
+            if p is None:
+                p = self.piece_tag_post(ti, ai, tid, False, view)
+            out.append(p[0])
+            bad.extend(p[1])
+            good.extend(p[2])
+        return tuple(out), tuple(bad), tuple(good)
 
     def _block(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object,
                active: tuple[int, ...] | None = None, watch: tuple[int, ...] = ()
@@ -487,7 +581,7 @@ class CompiledModel:
         if active is None or mode == PRESCAN:
             order: tuple[int, ...] = tuple(range(len(tis)))
             watch = ()
-        elif kind == RAISE or kind == DROP:
+        elif kind in (RAISE, DROP):
             order = active if k in active else tuple(sorted((*active, k)))
             if k in watch:
                 watch = tuple(x for x in watch if x != k)
@@ -504,7 +598,7 @@ class CompiledModel:
             r = self._drop[ti].get(tid)
             tags[k] = r if r is not None else self.piece_drop(ti, tid)
         elif kind == EVENT:
-            h = (*h, arg)  # type: ignore[assignment]
+            h = (*h, arg)  # type: ignore[arg-type]  # an EVENT choice's argument is its event name
         rung = self._rung
         pending = self._pending
         rows = self._rows
@@ -561,14 +655,34 @@ class CompiledModel:
         good: list[Property] = []
         reads = self._reads_axis
         posts = self._tag_post
-        for seq in (order, watch):
+        if watch:
+            # inert tags are not touched by the scan: their post-scan evaluation is one
+            # look-up for all of them, keyed by their parts and the axis core
+            wkey = (tuple([tags[j] for j in watch]), core)
+            wr = self._watch_memo[ai].get(wkey)
+            if wr is None:
+                wr = self._watch_post(ai, watch, tags, core)
+                self._watch_memo[ai][wkey] = wr
+            for j, t in zip(watch, wr[0]):
+                tags[j] = t
+            if wr[1]:
+                bad.extend(wr[1])
+            if wr[2]:
+                good.extend(wr[2])
+        for seq in (order,):
             for j in seq:
                 ti = tis[j]
                 tid = tags[j]
-                key = (tid, j in q, core if reads[ti] else -1)
+                if reads[ti]:
+                    view = self._view[ti].get(core)
+                    if view is None:
+                        view = self.view(ti, ai, core)
+                else:
+                    view = -1
+                key = (tid, j in q, view)
                 p = posts[ti].get(key)
                 if p is None:
-                    p = self.piece_tag_post(ti, ai, tid, key[1], key[2])
+                    p = self.piece_tag_post(ti, ai, tid, key[1], view)
                 tags[j] = p[0]
                 if p[1]:
                     bad.extend(p[1])
@@ -589,94 +703,159 @@ class CompiledModel:
 
     # ------------------------------------------------------------------ successors of a state
 
-    def enabled(self, state: State) -> list[tuple[int, int, int, int, object]]:
-        """(choice index, axis, kind, local tag, argument) offered in ``state``, in the
-        interpreter's order (tags in program order, events, nothing, prescan)."""
-        out: list[tuple[int, int, int, int, object]] = []
+    def local_choices(self, ai: int, state: Sequence[int]) -> list[tuple[int, int, int, object]]:
+        """The choices of axis ``ai``'s block offered in ``state``: (choice, kind, local tag,
+        argument), tags in program order then the axis's environment events."""
+        out: list[tuple[int, int, int, object]] = []
         limit = self.max_live
         rung = self._rung
-        busy_anywhere = False
-        for ai in range(self.naxes):
-            start = self.block_start[ai]
-            _core, q, h = self._split[state[start]]
-            if q or h:
-                busy_anywhere = True
-            tis = self.tis[ai]
-            live_flags = None
-            nlive = 0
-            if limit is not None:
-                live_flags = [self.live0(ti, state[start + 1 + j]) or j in q for j, ti in enumerate(tis)]
-                nlive = sum(live_flags)
-            for j, ti in enumerate(tis):
-                tid = state[start + 1 + j]
-                if rung[tid]:
-                    out.append((self.drops[ti], ai, DROP, j, None))
-                elif limit is None or nlive < limit or (live_flags is not None and live_flags[j]):
-                    for c, kk in self.raises[ti]:
-                        out.append((c, ai, RAISE, j, kk))
-        for c, ai, ev in self.events:
-            out.append((c, ai, EVENT, 0, ev))
-        out.append((self.nothing_index, -1, NOTHING, 0, None))
-        if self.has_prescan and not busy_anywhere:
-            out.append((self.prescan_index, -1, PRESCAN_PASS, 0, None))
+        start = self.block_start[ai]
+        q = self._split[state[start]][1]
+        tis = self.tis[ai]
+        live_flags = None
+        nlive = 0
+        if limit is not None:
+            live_flags = [self.live0(ti, state[start + 1 + j]) or j in q for j, ti in enumerate(tis)]
+            nlive = sum(live_flags)
+        for j, ti in enumerate(tis):
+            if rung[state[start + 1 + j]]:
+                out.append((self.drops[ti], DROP, j, None))
+            elif limit is None or nlive < limit or (live_flags is not None and live_flags[j]):
+                for c, kk in self.raises[ti]:
+                    out.append((c, RAISE, j, kk))
+        for c, a, ev in self.events:
+            if a == ai:
+                out.append((c, EVENT, 0, ev))
         return out
 
-    def _step_block(self, state: State, ai: int, mode: int, kind: int, k: int, arg: object
-                    ) -> tuple[tuple[int, ...], list[Property], list[Property]]:
+    def moves(self, ai: int, state: Sequence[int], mode: int) -> tuple[
+            tuple[tuple[int, ...], list[Property], list[Property]],
+            list[tuple[int, tuple[int, ...], list[Property], list[Property]]]]:
+        """Axis ``ai``'s block under no input, and the moves of its own choices that
+        differ from that: (choice, block, violated, reached).  Memoised per block on
+        systems of several axes (blocks of interchangeable axes share the table; the
+        choice numbers are then mapped to axis ``ai``'s)."""
         start = self.block_start[ai]
         n = self.block_len[ai]
+        key = None
         if self.use_block_memo:
-            block = state[start:start + n]
-            key = (block, mode, kind, k, arg)
-            memo = self._block_memo[ai]
-            r = memo.get(key)
-            if r is None:
-                aid, tags, bad, good = self._block(ai, state[start], list(state[start + 1:start + n]), mode, kind, k, arg)
-                r = ((aid, *tags), bad, good)
-                if len(memo) > 200_000:
-                    memo.clear()
-                memo[key] = r
-            return r  # type: ignore[return-value]
-        aid, tags, bad, good = self._block(ai, state[start], list(state[start + 1:start + n]), mode, kind, k, arg)
-        return (aid, *tags), bad, good
+            key = (state[start:start + n], mode)
+            r = self._own_memo[ai].get(key)
+            if r is not None:
+                return r
+            leader = self._leader[ai]
+            if leader != ai:
+                r = self._block_memo[leader].get(key)
+                if r is not None:
+                    remap = self._remap[ai]
+                    r2 = (r[0], [(remap[c], b, x, y) for c, b, x, y in r[1]])
+                    self._remember(ai, key, r2)
+                    return r2
+        aid = state[start]
+        tags = state[start + 1:start + n]
+        active, watch = self.context(ai, state)
+        a2, t2, bad, good = self._block(ai, aid, list(tags), mode, NOTHING, 0, None, active, watch)
+        base_blk = (a2, *t2)
+        base = (base_blk, bad, good)
+        out = []
+        for c, kind, k, arg in self.local_choices(ai, state):
+            a2, t2, bad, good = self._block(ai, aid, list(tags), mode, kind, k, arg, active, watch)
+            blk = (a2, *t2)
+            if blk == base_blk and not bad and not good:
+                continue
+            out.append((c, blk, bad, good))
+        if key is not None:
+            self._remember(ai, key, (base, out))
+            leader = self._leader[ai]
+            if leader != ai:
+                back = self._remap_back[ai]
+                self._block_memo[leader][key] = (base, [(back[c], b, x, y) for c, b, x, y in out])
+            else:
+                self._block_memo[ai][key] = (base, out)
+        return base, out
+
+    def _remember(self, ai: int, key: tuple[object, ...], value: tuple[BlockStep, Moves]) -> None:
+        memo = self._own_memo[ai]
+        if len(memo) > 300_000:  # bounded: a block memo is a cache, not state
+            memo.clear()
+            self._block_memo[self._leader[ai]].clear()
+        memo[key] = value
 
     def successors(self, state: State) -> list[tuple[int, State, list[Property], list[Property]]]:
-        """(choice index, canonical successor, violated, reached) for every enabled choice."""
+        """(choice index, canonical successor, violated, reached) for the enabled choices.
+
+        Choices whose successor is the same as the nothing choice's (and that violate
+        or reach nothing) are left out: they add no state and no transition.  On systems
+        of several axes the properties decided in the blocks a choice does not touch are
+        reported with the nothing choice only (same parent, same depth)."""
         phase = state[0]
         mode = COARSE if phase % self.spu == 0 else NORMAL
         nphase = (phase + 1) % self.spu
-        out = []
         naxes = self.naxes
-        if naxes == 1:
-            active, watch = self.context(0, state)
-            aid = state[1]
-            tags = state[2:]
-            block = self._block
-            for c, _ai, kind, k, arg in self.enabled(state):
-                if kind == PRESCAN_PASS:
-                    aid2, tags2, bad, good = block(0, aid, list(tags), PRESCAN, NOTHING, 0, None)
-                else:
-                    aid2, tags2, bad, good = block(0, aid, list(tags), mode, kind, k, arg, active, watch)
-                out.append((c, (nphase, aid2, *tags2), bad, good))
-            return out
-        base: list[tuple[tuple[int, ...], list[Property], list[Property]]] = [
-            self._step_block(state, ai, mode, NOTHING, 0, None) for ai in range(naxes)]
-        for c, ai, kind, k, arg in self.enabled(state):
-            if kind == PRESCAN_PASS:
-                blocks = [self._step_block(state, b, PRESCAN, NOTHING, 0, None) for b in range(naxes)]
-            elif kind == NOTHING:
-                blocks = base
+        busy = False
+        vec = [nphase]
+        base_bad: list[Property] = []
+        base_good: list[Property] = []
+        all_moves = []
+        own = self._own_memo
+        starts = self.block_start
+        lens = self.block_len
+        group_of = self._group_of
+        expanded: set[tuple[int, object]] = set()
+        for ai in range(naxes):
+            start = starts[ai]
+            n = lens[ai]
+            key = (state[start:start + n], mode)
+            r = own[ai].get(key)
+            if r is None:
+                r = self.moves(ai, state, mode)
+            (blk, bad, good), mv = r
+            vec.extend(blk)
+            if bad:
+                base_bad.extend(bad)
+            if good:
+                base_good.extend(good)
+            if mv:
+                g = group_of[ai]
+                if g >= 0:
+                    # interchangeable axes in equal blocks have the same moves, up to the
+                    # permutation that canonicalisation undoes: expand one of them
+                    gk = (g, key)
+                    if gk in expanded:
+                        mv = []
+                    else:
+                        expanded.add(gk)
+            all_moves.append(mv)
+            if not busy and self._busy[state[start]]:
+                busy = True
+        canonical = self.canonical_fast
+        out = [(self.nothing_index, canonical(vec), base_bad, base_good)]
+        for ai, mv in enumerate(all_moves):
+            if not mv:
+                continue
+            start = starts[ai]
+            if lens[ai] == 1:
+                for c, blk, bad, good in mv:
+                    v = vec.copy()
+                    v[start] = blk[0]
+                    out.append((c, canonical(v), bad, good))
             else:
-                blocks = list(base)
-                blocks[ai] = self._step_block(state, ai, mode, kind, k, arg)
-            vec = [nphase]
-            bad = []
-            good = []
-            for blk, b, g in blocks:
-                vec.extend(blk)
-                if b:
-                    bad.extend(b)
-                if g:
-                    good.extend(g)
-            out.append((c, self.canonical(vec), bad, good))
+                end = start + lens[ai]
+                for c, blk, bad, good in mv:
+                    v = vec.copy()
+                    v[start:end] = blk
+                    out.append((c, canonical(v), bad, good))
+        if self.has_prescan and not busy:
+            v = [nphase]
+            p_bad: list[Property] = []
+            p_good: list[Property] = []
+            for ai in range(naxes):
+                start = self.block_start[ai]
+                n = self.block_len[ai]
+                a2, t2, pb, pg = self._block(ai, state[start], list(state[start + 1:start + n]), PRESCAN, NOTHING, 0, None)
+                v.append(a2)
+                v.extend(t2)
+                p_bad.extend(pb)
+                p_good.extend(pg)
+            out.append((self.prescan_index, canonical(v), p_bad, p_good))
         return out

@@ -17,15 +17,15 @@ engine must reproduce them exactly.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 from checker.model import Choice
 from checker.properties import Property
 from checker.search import SearchResult, Witness
-from statecharts.scenario import SCENARIO_FORMAT, scan_cell
 from statecharts.outputs import atomic_write_text
+from statecharts.scenario import SCENARIO_FORMAT, scan_cell
 
 
 class ReplayError(RuntimeError):
@@ -76,7 +76,7 @@ def replay(result: SearchResult, prop: str, witness: Witness | None, *, end_stat
     initial = before
     steps: list[TraceStep] = []
 
-    def try_choices(accept: object) -> bool:
+    def try_choices(accept: Callable[[tuple[object, ...], list[Property], list[Property]], bool]) -> bool:
         nonlocal concrete, monitors, before
         system.restore(concrete)
         model.monitor_values = list(monitors)
@@ -86,7 +86,7 @@ def replay(result: SearchResult, prop: str, witness: Witness | None, *, end_stat
             model.monitor_values = list(monitors)
             index_before = system.index
             flat, bad, good, _facts = model.step(c)
-            if accept(flat, bad, good):  # type: ignore[operator]
+            if accept(flat, bad, good):
                 obs = _plain(system.observe())
                 changes = tuple((o, f, before.get(o, {}).get(f), v) for o, fields in obs.items() for f, v in fields.items()
                                 if before.get(o, {}).get(f) != v)
@@ -101,7 +101,10 @@ def replay(result: SearchResult, prop: str, witness: Witness | None, *, end_stat
     codec = result.codec
     for state, _via in path[1:]:
         target = result.encoded[state]
-        if not try_choices(lambda flat, bad, good, t=target: codec.encode(flat) == t):
+        def reaches(flat: tuple[object, ...], bad: list[Property], good: list[Property], t: bytes = target) -> bool:
+            return bool(codec.encode(flat) == t)
+
+        if not try_choices(reaches):
             raise ReplayError(f"no input reproduces step {len(steps) + 1} of the path to state {state}")
     if end_state is None and witness is not None and witness.parent >= 0:
         if kind == "violation":

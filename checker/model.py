@@ -38,15 +38,19 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 from checker.compile import FastAxis
 from checker.properties import Property
 from checker.system import SystemDef, initial_assignments, operand_choices
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic
+from statecharts.expr import Expr
 from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System, TagInstance
 
-Flat = tuple[object, ...]
+#: An abstract state: the clock phase, then axis and tag parts of several shapes (see
+#: :meth:`Model.extract`).
+Flat = tuple[Any, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -206,8 +210,35 @@ def retirement_check(spec: ir.Spec, ins: ir.Instruction) -> str | None:
 class _TagSlot:
     """Per-tag constants the model uses in its inner loops."""
 
-    __slots__ = ("tag", "axis_index", "local", "fields", "initial", "op_names", "default_ops", "retire",
-                 "rise_guard", "monitors", "inv", "reach", "reads_axis", "ins", "retired")
+    __slots__ = (
+        "axis_index",
+        "default_ops",
+        "fields",
+        "initial",
+        "ins",
+        "inv",
+        "local",
+        "monitors",
+        "op_names",
+        "reach",
+        "reads_axis",
+        "retire",
+        "retired",
+        "rise_guard",
+        "tag",
+    )
+    tag: TagInstance
+    ins: ir.Instruction
+    axis_index: int
+    local: int
+    fields: tuple[str, ...]
+    initial: tuple[object, ...]
+    op_names: tuple[str, ...]
+    default_ops: tuple[object, ...]
+    retire: bool
+    rise_guard: Callable[[Mapping[str, object]], object] | None
+    reads_axis: bool
+    retired: tuple[object, ...]
 
     def __init__(self) -> None:
         self.monitors: tuple[Property, ...] = ()
@@ -237,7 +268,8 @@ class Model:
         self.assignments = initial_assignments(sysdef)
         self.system = self.build_system(self.assignments[0])
         self.spu = self.system.scans_per_update
-        self.axes = list(self.system.axes.values())
+        # AxisInstance or the back end's axes (FastAxis), used through their common interface
+        self.axes: list[Any] = list(self.system.axes.values())
         self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
         # a property tied to a chart the system has no axis of does not apply to it
         self.properties = tuple(p for p in self.properties if p.chart is None or p.chart in self.charts)
@@ -357,7 +389,7 @@ class Model:
         self.trace: list[Executed | Errored | Done] = []
         self.fired: list[list[str]] = [[] for _ in self.axes]
         for axis, f in zip(self.axes, self.fired):
-            axis.fired = f  # type: ignore[attr-defined]
+            axis.fired = f
         self._axis_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...]]] = {}
         self._tag_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...], tuple[int, ...], tuple[bool, ...]]] = {}
 
@@ -376,13 +408,13 @@ class Model:
     def build_system(self, assignment: Sequence[int], backend: Callable[..., object] | None = None) -> System:
         """A fresh concrete system in the initial state chosen by ``assignment``."""
         make = backend or self.axis_backend
-        axes = []
+        axes: list[Any] = []
         for (name, g), ci in zip(self.axis_defs, assignment):
             variables = dict(g.variables)
             variables.update(dict(g.configurations[ci].variables))
             axes.append(make(self.spec.chart(g.chart), name, state=g.state, variables=variables,
                              parameters=self.params))
-        return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,  # type: ignore[arg-type]
+        return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
                       coarse_update_ms=self.sysdef.coarse_update_ms)
 
     # -- state <-> system -----------------------------------------------------------
@@ -399,8 +431,8 @@ class Model:
         held = system.held_events
         slots = self.slots
         for ai, axis in enumerate(self.axes):
-            snap = axis.snapshot()  # type: ignore[attr-defined]
-            values = self.extract_axis_values(ai, snap[1])  # type: ignore[arg-type]
+            snap = axis.snapshot()
+            values = self.extract_axis_values(ai, snap[1])
             q = tuple([self.queue_local[n] for n in queue if self.tag_axis[n] == ai]) if queue else ()
             h = tuple([e.event for e in held if e.axis == axis.name]) if held else ()
             if len(snap) > 2:
@@ -413,7 +445,7 @@ class Model:
 
     def extract_axis_values(self, ai: int, values: tuple[object, ...]) -> tuple[object, ...]:
         """An axis's chart variable values with the collapsed ones replaced by their initial values."""
-        collapse = self.collapse_index[self.axes[ai].chart.id]  # type: ignore[attr-defined]
+        collapse = self.collapse_index[self.axes[ai].chart.id]
         return tuple([collapse.get(i, v) for i, v in enumerate(values)]) if collapse else values
 
     def extract_tag(self, ti: int, queued: bool) -> tuple[object, ...]:
@@ -433,7 +465,7 @@ class Model:
     def load(self, flat: Flat) -> None:
         """Make the model's system be in abstract state ``flat``."""
         system = self.system
-        system.index = flat[0]  # type: ignore[assignment]
+        system.index = flat[0]
         i = 1
         queue: list[str] = []
         held: list[EnvironmentEvent] = []
@@ -441,12 +473,12 @@ class Model:
         for ai, axis in enumerate(self.axes):
             part = flat[i]
             i += 1
-            if len(part) > 4:  # type: ignore[arg-type]
-                config, values, hist, q, e = part  # type: ignore[misc]
-                axis.restore((config, values, hist))  # type: ignore[attr-defined]
+            if len(part) > 4:
+                config, values, hist, q, e = part
+                axis.restore((config, values, hist))
             else:
-                config, values, q, e = part  # type: ignore[misc]
-                axis.restore((config, values))  # type: ignore[attr-defined]
+                config, values, q, e = part
+                axis.restore((config, values))
             if q:
                 names = self.tags_of_axis[ai]
                 queue.extend([self.tags[names[k]].name for k in q])
@@ -455,7 +487,7 @@ class Model:
             for ti in self.tags_of_axis[ai]:
                 s = slots[ti]
                 tag = s.tag
-                fields, rung, ops, mon = flat[i]  # type: ignore[misc]
+                fields, rung, ops, mon = flat[i]
                 i += 1
                 tag.values.update(zip(s.fields, fields))
                 tag.rung = rung
@@ -501,7 +533,7 @@ class Model:
         violated and the goals reached in it."""
         fresh = self.build_system(assignment)
         for axis, f in zip(fresh.axes.values(), self.axes):
-            f.restore(axis.snapshot())  # type: ignore[attr-defined]
+            f.restore(axis.snapshot())
         for tag, s in zip(self.tags, self.slots):
             tag.values.update(zip(s.fields, s.initial))
             tag.rung = False
@@ -528,7 +560,7 @@ class Model:
         return self.extract(), violated, reached, self.facts()
 
     def facts(self) -> StepFacts:
-        fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)  # type: ignore[attr-defined]
+        fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)
         executed: list[tuple[str, str]] = []
         errors: list[tuple[str, int, int]] = []
         checks: list[tuple[str, str]] = []
@@ -545,12 +577,12 @@ class Model:
 
     def axis_env(self, ai: int) -> dict[str, object]:
         axis = self.axes[ai]
-        env: dict[str, object] = dict(axis.env)  # type: ignore[attr-defined]
-        leaf = axis.leaf  # type: ignore[attr-defined]
+        env: dict[str, object] = dict(axis.env)
+        leaf = axis.leaf
         env["state"] = leaf.id
-        env["active"] = axis.active  # type: ignore[attr-defined]
-        env["axis"] = axis.name  # type: ignore[attr-defined]
-        env[axis.chart.state_attribute] = leaf.value  # type: ignore[attr-defined]
+        env["active"] = axis.active
+        env["axis"] = axis.name
+        env[axis.chart.state_attribute] = leaf.value
         return env
 
     def tag_env(self, ti: int, axis_env: dict[str, object] | None, queued: bool | None = None) -> dict[str, object]:
@@ -581,7 +613,7 @@ class Model:
         inv, reach = self.axis_props[ai]
         if not inv and not reach:
             return
-        key = self.axes[ai].snapshot()  # type: ignore[attr-defined]
+        key = self.axes[ai].snapshot()
         memo = self._axis_memo.get(key)
         if memo is None:
             env = self.axis_env(ai)
@@ -604,14 +636,14 @@ class Model:
         tag = s.tag
         key: tuple[object, ...] = (ti, tuple(tag.values.values()), tag.rung, queued, self.monitor_values[ti])
         if s.reads_axis:
-            key = (*key, self.axes[s.axis_index].snapshot())  # type: ignore[attr-defined]
+            key = (*key, self.axes[s.axis_index].snapshot())
         memo2 = self._tag_memo.get(key)
         if memo2 is None:
             aenv = None
             if s.reads_axis:
                 aenv = axis_envs.get(s.axis_index)
                 if aenv is None:
-                    aenv = self.axes[s.axis_index].expression_env()  # type: ignore[attr-defined]
+                    aenv = self.axes[s.axis_index].expression_env()
                     axis_envs[s.axis_index] = aenv
             env = self.tag_env(ti, aenv, queued)
             inv_ok = tuple(_holds(p, env, p.holds) for p in s.inv)
@@ -637,10 +669,12 @@ class Model:
                     violated.append(p)
 
 
-def _holds(p: Property, env: Mapping[str, object], e: object) -> bool:
+def _holds(p: Property, env: Mapping[str, object], e: Expr | None) -> bool:
     if p.where is not None and not p.where(env):
         return p.kind != "reachable"
-    return bool(e(env))  # type: ignore[operator]
+    if e is None:  # the property loader gives every invariant `holds` and every goal `goal`
+        raise ValueError(f"property {p.name} has no condition to evaluate")
+    return bool(e(env))
 
 
 #: monitor value of a response obligation that was met (or excused) while the trigger holds

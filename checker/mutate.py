@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 from statecharts import ir
 
@@ -31,12 +32,12 @@ def _replace_chart(spec: ir.Spec, chart: ir.Chart) -> ir.Spec:
     return dataclasses.replace(spec, charts=charts, instructions=instructions)
 
 
-def _replace_transition(spec: ir.Spec, chart_id: str, tid: str, **changes: object) -> ir.Spec:
+def _replace_transition(spec: ir.Spec, chart_id: str, tid: str, **changes: Any) -> ir.Spec:
     chart = spec.chart(chart_id)
     found = [t for t in chart.transitions if t.id == tid]
     if not found:
         raise KeyError(f"chart {chart_id} has no transition {tid!r}")
-    ts = tuple(dataclasses.replace(t, **changes) if t.id == tid else t for t in chart.transitions)  # type: ignore[arg-type]
+    ts = tuple(dataclasses.replace(t, **changes) if t.id == tid else t for t in chart.transitions)
     return _replace_chart(spec, dataclasses.replace(chart, transitions=ts))
 
 

@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import ast
 import difflib
-
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +45,7 @@ from typing import Any
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
 from statecharts.expr import Expr, ExprError, check_names, parse_expression
-from statecharts.loader import AXIS_READ_ONLY, _plain, bundled_spec_dir, read_yaml, schema_diagnostics
+from statecharts.loader import AXIS_READ_ONLY, bundled_spec_dir, plain_data, read_yaml, schema_diagnostics
 
 PROPERTIES_FORMAT = "motionchart-properties/1"
 KINDS = ("invariant", "reachable", "deadlock_free", "response", "cover")
@@ -158,7 +157,7 @@ def load_properties(spec: ir.Spec, paths: Sequence[Path | str] | None = None) ->
         if problems:
             errors.extend(problems)
             continue
-        doc = _plain(tree)
+        doc = plain_data(tree)
         for i, node in enumerate(doc["properties"]):
             parts: tuple[Any, ...] = ("properties", i)
             prop = _build(spec, name, tree, parts, node, errors)

@@ -35,9 +35,9 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from statecharts.diagnostics import InputError
 from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
 from statecharts.outputs import replace_folder
-from statecharts.diagnostics import InputError
 
 COMMANDS = ("diagram", "docs", "generate")
 FORMATS = ("dot", "svg", "png", "mermaid")

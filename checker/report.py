@@ -8,12 +8,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from checker import coverage as cov
 from checker.counterexample import Trace, replay, table_text, write_scenario
 from checker.properties import Property
 from checker.search import SearchResult
 from statecharts.outputs import atomic_write_with
+
+if TYPE_CHECKING:
+    import networkx as nx
 
 
 @dataclass
@@ -79,7 +83,7 @@ class Report:
             "states_per_second": round(r.states_per_second, 1),
             "peak_memory_mb": round(r.peak_rss_kb / 1024, 1),
             "choices": len(m.choices),
-            "symmetric_axis_groups": [[m.axes[a].name for a in g] for g in m.symmetric_groups],  # type: ignore[attr-defined]
+            "symmetric_axis_groups": [[m.axes[a].name for a in g] for g in m.symmetric_groups],
             "abstractions": abstraction_notes(r),
             "properties": [v.as_dict() for v in self.verdicts],
             "coverage": coverage,
@@ -167,23 +171,23 @@ def build_report(result: SearchResult, *, counterexamples: Path | None = None, g
     return report
 
 
-def to_networkx(result: SearchResult):  # type: ignore[no-untyped-def]
+def to_networkx(result: SearchResult) -> nx.DiGraph[int]:
     """The explored state graph as a ``networkx.DiGraph`` (needs ``keep_graph=True``)."""
     import networkx as nx
 
     if result.edges is None:
         raise ValueError("the search did not keep the graph; run explore(..., keep_graph=True)")
-    g = nx.DiGraph()
+    g: nx.DiGraph[int] = nx.DiGraph()
     m = result.model
     for i in range(result.states):
         flat = result.state(i)
         label = []
         for ai, axis in enumerate(m.axes):
             part = flat[m.block_start[ai]]
-            leaf = axis.c.leaf(part[0]).id  # type: ignore[attr-defined, index]
+            leaf = axis.c.leaf(part[0]).id
             live = [m.tags[t].instruction.id for t in m.tags_of_axis[ai]
                     if flat[m.block_start[ai] + 1 + m.tags_of_axis[ai].index(t)] != m.slots[t].retired]
-            label.append(f"{axis.name}={leaf}" + (f"[{','.join(live)}]" if live else ""))  # type: ignore[attr-defined]
+            label.append(f"{axis.name}={leaf}" + (f"[{','.join(live)}]" if live else ""))
         g.add_node(i, label=" ".join(label), depth=int(result.depth_of[i]), initial=result.parent[i] < 0)
     e = result.edges
     for k in range(0, len(e), 2):

@@ -104,10 +104,10 @@ class SearchResult:
     peak_rss_kb: int
     codec: Codec | CoreCodec
     encoded: list[bytes]
-    parent: array
-    via: array
-    depth_of: array
-    edges: array | None
+    parent: array[int]
+    via: array[int]
+    depth_of: array[int]
+    edges: array[int] | None
     initial_assignment: dict[int, int]
     #: bytes of the visited set's table (the compiled core's search; 0 otherwise)
     visited_bytes: int = 0
@@ -194,7 +194,8 @@ class Codec:
         return tuple([values[c] for (_t, values), c in zip(self.slots, codes)])
 
 
-def _progress_wanted() -> bool:
+def progress_wanted() -> bool:
+    """Whether long work shows a progress bar: on a terminal, and not under CI."""
     return sys.stderr.isatty() and os.environ.get("CI", "").lower() not in ("true", "1")
 
 
@@ -241,9 +242,9 @@ def explore_interpreted(
             if part in seen_axis_parts:
                 continue
             seen_axis_parts.add(part)
-            cid = axis.chart.id  # type: ignore[attr-defined]
-            cov.configs.add((cid, part[0]))  # type: ignore[index]
-            for v, x in zip(axis.c.variables, part[1]):  # type: ignore[attr-defined, index]
+            cid = axis.chart.id
+            cov.configs.add((cid, part[0]))
+            for v, x in zip(axis.c.variables, part[1]):
                 cov.values.add((cid, v, x))
 
     for ai_index, assignment in enumerate(model.assignments):
@@ -264,7 +265,7 @@ def explore_interpreted(
         for p in good:
             reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     bar = None
     task = None
     if show:
@@ -468,7 +469,7 @@ def explore(
             widen()
             return pack(*state)
 
-    for ai_index, (state, bad, good) in enumerate(core.initial_states()):
+    for ai_index, (state, bad0, good0) in enumerate(core.initial_states()):
         code = encode(state)
         if code in seen:
             continue
@@ -481,12 +482,12 @@ def explore(
         via.append(ai_index)
         depth_of.append(0)
         initial_assignment[sid] = ai_index
-        for p in bad:
+        for p in bad0:
             violations.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
-        for p in good:
+        for p in good0:
             reached.setdefault(p.name, Witness(p.name, -1, ai_index, 0))
 
-    show = _progress_wanted() if progress is None else progress
+    show = progress_wanted() if progress is None else progress
     bar = None
     task = None
     if show:

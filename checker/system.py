@@ -25,12 +25,12 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics
+from statecharts.loader import bundled_spec_dir, plain_data, read_yaml, schema_diagnostics
 
 SYSTEM_FORMAT = "motionchart-system/1"
 
 
-class SystemError_(InputError):  # noqa: N801 - SystemError is a builtin name
+class SystemError_(InputError):
     """A system definition is malformed."""
 
 
@@ -134,7 +134,7 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
     problems = schema_diagnostics(name, tree, system_schema(), "a system")
     if problems:
         raise SystemError_(problems)
-    doc = _plain(tree)
+    doc = plain_data(tree)
 
     def err(parts: tuple[Any, ...], message: str) -> None:
         line, col = locate(tree, parts)

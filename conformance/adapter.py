@@ -73,6 +73,8 @@ class ReferenceAdapter:
         except (SetupError, EvalError, KeyError, TypeError, ValueError, AttributeError) as exc:
             detail = f"missing field {exc}" if isinstance(exc, KeyError) else str(exc)
             return {"type": "error", "message": f"{kind}: {detail}"}
+        except RuntimeError as exc:  # the engine refused to go on (e.g. an eventless loop of a mutant)
+            return {"type": "error", "message": f"{kind}: {type(exc).__name__}: {exc}"}
         return {"type": "error", "message": f"unknown message type {kind!r}"}
 
 

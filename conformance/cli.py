@@ -83,6 +83,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
     a = sub.add_parser("adapter", help="serve the project's engine over the conformance protocol on stdin/stdout")
     a.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
+    a.add_argument("--mutant", metavar="ID", help="serve this mutant of the spec (ids as `mutate --score --json` lists them)")
 
     m = sub.add_parser("mutate", help="mutation score of the conformance suite",
                        description="Build mutants of the spec (dropped guards, swapped targets, changed codes and "
@@ -118,7 +119,7 @@ def _progress(quiet: bool) -> Any:
 
 
 def _missing(paths: list[str] | None) -> list[str]:
-    return [repr(p) if not p else p for p in (paths or []) if not p or not Path(p).exists()]
+    return [p if p else repr(p) for p in (paths or []) if not p or not Path(p).exists()]
 
 
 def _vectors(args: argparse.Namespace, out: TextIO) -> int:
@@ -179,7 +180,7 @@ def default_suite_dir(quiet: bool = False) -> Path:
         from statecharts.loader import load_spec
         if not quiet:
             print(f"conform: generating the bundled suite into {d} (once; a few minutes)", file=sys.stderr)
-        suite = vec.build_suite(load_spec(), scenarios=[r for r in roots[1:]], progress=_progress(quiet))
+        suite = vec.build_suite(load_spec(), scenarios=list(roots[1:]), progress=_progress(quiet))
         vec.write_suite(suite, d)
     return d
 
@@ -250,6 +251,13 @@ def _adapter(args: argparse.Namespace) -> int:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
         return EXIT_FAIL
+    if args.mutant:
+        from conformance.mutation import find
+        try:
+            spec = find(spec, args.mutant).build(spec)
+        except KeyError:
+            print(f"motionchart adapter: no mutant {args.mutant!r}", file=sys.stderr)
+            return EXIT_USAGE
     return serve(spec)
 
 
@@ -272,7 +280,15 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
             print(d, file=sys.stderr)
         return EXIT_FAIL
     progress = None if (args.quiet or args.json) else (lambda msg: print(f"mutate: {msg}", file=sys.stderr, flush=True))
-    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress)
+    explained: dict[str, str] = {}
+    manifest = directory / "manifest.json" if directory.is_dir() else None
+    if manifest is not None and manifest.is_file():
+        try:
+            explained = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]["orders"]["explained"]
+        except (ValueError, KeyError, TypeError):
+            explained = {}
+    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
+                           explained_orders=explained)
     if args.json:
         json.dump(score.as_dict(), out, indent=2, sort_keys=True, default=str)
         out.write("\n")

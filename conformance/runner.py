@@ -23,6 +23,7 @@ further attempts.  Every path ends in bounded time.
 
 from __future__ import annotations
 
+import contextlib
 import fnmatch
 import json
 import math
@@ -150,10 +151,8 @@ class ProcessTransport(Transport):
             self.buf += chunk
 
     def _reap(self) -> None:
-        try:
+        with contextlib.suppress(subprocess.TimeoutExpired):
             self.proc.wait(timeout=1.0)
-        except subprocess.TimeoutExpired:
-            pass
 
     def describe_exit(self) -> str:
         code = self.proc.poll()
@@ -180,7 +179,7 @@ class ProcessTransport(Transport):
                 raise ProtocolError(f"answer is not a JSON object with a `type`: {line[:80]!r}")
             return answer
 
-    def close(self, graceful: bool = True) -> None:  # type: ignore[override]
+    def close(self, graceful: bool = True) -> None:
         if graceful and self.proc.poll() is None:
             try:
                 self._send({"type": "bye"})
@@ -192,10 +191,8 @@ class ProcessTransport(Transport):
                 os.killpg(self.proc.pid, 9)
             except (ProcessLookupError, PermissionError):
                 self.proc.kill()
-            try:
+            with contextlib.suppress(subprocess.TimeoutExpired):
                 self.proc.wait(timeout=5.0)
-            except subprocess.TimeoutExpired:
-                pass
         self.sel.close()
         for stream in (self.proc.stdin, self.proc.stdout, self.proc.stderr):
             try:
@@ -232,8 +229,8 @@ class Verdict:
     label: str = ""
     object: str | None = None
     field: str | None = None
-    expected: object = None
-    actual: object = None
+    expected: Any = None
+    actual: Any = None
     seconds: float = 0.0
     reason: str = ""  # known-failure reason
 
@@ -273,7 +270,7 @@ def _same(expected: object, actual: object) -> bool:
 
 
 def _spell(value: object) -> str:
-    return json.dumps(value) if not isinstance(value, str) else json.dumps(value)
+    return json.dumps(value)
 
 
 class Supports:
@@ -322,12 +319,13 @@ def first_difference(vector: Mapping[str, Any], supports: Supports, scan: int | 
                 continue
             got = actual.get(obj)
             have = isinstance(got, dict) and fld in got
-            if not have or not _same(value, got[fld]):
+            seen = got[fld] if isinstance(got, dict) and have else None
+            if not have or not _same(value, seen):
                 where = "before the first scan" if scan is None else f"scan {scan}" + (f" ({label})" if label else "")
-                shown = _spell(got[fld]) if have else "nothing (field missing)"
+                shown = _spell(seen) if have else "nothing (field missing)"
                 return Verdict(vector["id"], "fail", f"{where}: {obj}.{fld} expected {_spell(value)}, got {shown}",
                                scan=scan, label=label, object=obj, field=fld, expected=value,
-                               actual=got[fld] if have else None)
+                               actual=seen)
     return None
 
 
@@ -393,9 +391,8 @@ class Worker:
 
     def ensure(self) -> bool:
         while self.transport is None:
-            if not self._start():
-                if self.failed_starts >= 2:
-                    return False
+            if not self._start() and self.failed_starts >= 2:
+                return False
         return True
 
     def run(self, vector: Mapping[str, Any]) -> Verdict:
@@ -529,7 +526,7 @@ class RunResult:
     problems: list[str] = field(default_factory=list)  # stale known failures and the like
 
     def counts(self) -> dict[str, int]:
-        out = {k: 0 for k in ("pass", "fail", "error", "timeout", "skipped", "xfail", "xpass")}
+        out = dict.fromkeys(("pass", "fail", "error", "timeout", "skipped", "xfail", "xpass"), 0)
         for v in self.verdicts:
             out[v.verdict] += 1
         return out

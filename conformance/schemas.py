@@ -67,7 +67,7 @@ INPUTS = {
 COVERS = {
     "type": "object", "additionalProperties": False,
     "required": ["states", "transitions", "error_codes", "cells", "checks"],
-    "properties": {k: NAME_LIST for k in ("states", "transitions", "error_codes", "cells", "checks", "stated")},
+    "properties": dict.fromkeys(("states", "transitions", "error_codes", "cells", "checks", "orders", "stated"), NAME_LIST),
 }
 REQUIRES = {
     "type": "object", "additionalProperties": False,

@@ -33,7 +33,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import Errored, EnvironmentEvent, Executed, ScanInputs, System
+from statecharts.scan import EnvironmentEvent, Errored, Executed, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -49,8 +49,10 @@ class Covered:
     error_codes: set[str] = field(default_factory=set)
     cells: set[str] = field(default_factory=set)
     checks: set[str] = field(default_factory=set)
+    #: adjacent checks k and k+1 that both failed where k was the first: ``MSO.shutdown<faulted``
+    orders: set[str] = field(default_factory=set)
 
-    KINDS = ("states", "transitions", "error_codes", "cells", "checks")
+    KINDS = ("states", "transitions", "error_codes", "cells", "checks", "orders")
 
     def update(self, other: Covered) -> None:
         for k in self.KINDS:
@@ -67,6 +69,24 @@ class Covered:
             else:
                 out[k] = sorted(items)
         return out
+
+
+class _RecordingSystem(System):
+    """The scan rules unchanged; a failed check also notes whether the next one failed too
+    (then the order of the two decided the reported code)."""
+
+    orders: set[str]
+
+    def _first_failure(self, tag: Any, stages: tuple[ir.Stage, ...]) -> ir.Check | None:
+        failed = super()._first_failure(tag, stages)
+        if failed is not None:
+            checks = tag.instruction.checks
+            k = next((i for i, c in enumerate(checks) if c is failed), None)
+            if k is not None and k + 1 < len(checks):
+                nxt = checks[k + 1]
+                if nxt.stage in stages and nxt.fails_when(self._check_env(tag)):
+                    self.orders.add(f"{tag.instruction.id}.{failed.id}<{nxt.id}")
+        return failed
 
 
 def error_item(mnemonic: str, err: int, exerr: int) -> str:
@@ -117,7 +137,8 @@ class Session:
                 raise SetupError(f"tag {p['tag']}: unknown axis {p['axis']!r}")
             program.append((p["tag"], p["instruction"], p["axis"]))
         try:
-            self.system = System(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms)
+            cls = _RecordingSystem if record else System
+            self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms)
         except (KeyError, ValueError) as exc:
             raise SetupError(str(exc)) from None
         for p in setup.get("program", []):
@@ -125,6 +146,7 @@ class Session:
         self.record = record
         self.covered = Covered()
         if record:
+            self.system.orders = self.covered.orders  # type: ignore[attr-defined]
             for axis in axes:
                 axis.fired = []
             self._note_states()
@@ -164,7 +186,7 @@ class Session:
             trace: list[object] = []
             system.trace = trace  # type: ignore[assignment]
             for axis in system.axes.values():
-                axis.fired.clear()
+                axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
             system.advance(si)
             system.trace = None
             self._note(trace)
@@ -180,7 +202,7 @@ class Session:
     def _note(self, trace: list[object]) -> None:
         cov = self.covered
         for axis in self.system.axes.values():
-            cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)
+            cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)  # type: ignore[attr-defined]  # see above
         tags = self.system.tags
         for rec in trace:
             if type(rec) is Executed:

@@ -32,6 +32,7 @@ Output is deterministic: the same spec and scenarios give byte-identical files.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -51,10 +52,12 @@ from statecharts.diagnostics import Diagnostic, ScenarioError
 VECTOR_FORMAT = "motionchart-vector/1"
 MANIFEST_FORMAT = "motionchart-vector-manifest/1"
 #: the systems vectors are generated from: the bundled check systems (noncip_pairs adds no
-#: item and takes minutes) and two small systems of this package for the CIP instruction x
-#: state cells those leave out (self-test states; MRHD through initialisation and tests)
+#: item and takes minutes) and small systems of this package for what those leave out (CIP
+#: self-test states; MRHD through a CIP axis's initialisation and tests; the servo axis's
+#: encoder and marker tests; a servo axis starting in Axis Faulted without a latched fault)
 SYSTEMS_DIR = Path(__file__).resolve().parent / "systems"
-DEFAULT_SYSTEMS = ("noncip", "cip", str(SYSTEMS_DIR / "cip_unassigned.yaml"), str(SYSTEMS_DIR / "cip_hookup.yaml"))
+DEFAULT_SYSTEMS = ("noncip", "cip", *(str(SYSTEMS_DIR / f"{n}.yaml") for n in (
+    "cip_unassigned", "cip_hookup", "noncip_hookup", "noncip_faulted_start")))
 AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
                 "which runs on a separate world of its own; vectors carry the main scenario format only")
@@ -63,7 +66,7 @@ LADDER_LEFT_OUT = ("runs a ladder program file (docs/programs.md); version 1 of 
 #: charts that only the add-on instruction's world drives
 AOI_CHARTS = ("AxisVirtual", "DeviceHandler")
 
-ORDER_OF_KINDS = ("transitions", "error_codes", "cells", "checks", "states")
+ORDER_OF_KINDS = ("transitions", "error_codes", "cells", "checks", "orders", "states")
 
 
 @dataclass
@@ -112,7 +115,21 @@ def _universe(spec: ir.Spec) -> dict[str, list[str]]:
     shim = SimpleNamespace(spec=spec)
     out = {k: coverage.universe(shim, k, whole_spec=True) for k in ("states", "transitions", "error_codes", "cells")}  # type: ignore[arg-type]
     out["checks"] = [f"{ins.id}.{c.id}" for ins in spec.instructions for c in ins.checks]
+    out["orders"] = [order_item(ins, k) for ins in spec.instructions for k in range(len(ins.checks) - 1)
+                     if observable_order(ins, k)]
     return out
+
+
+def order_item(ins: ir.Instruction, k: int) -> str:
+    """The order of adjacent checks k and k+1: ``MSO.shutdown<faulted``."""
+    return f"{ins.id}.{ins.checks[k].id}<{ins.checks[k + 1].id}"
+
+
+def observable_order(ins: ir.Instruction, k: int) -> bool:
+    """Whether swapping checks k and k+1 could be seen at all: not when both report the
+    same ERR and EXERR at the same stage."""
+    a, b = ins.checks[k], ins.checks[k + 1]
+    return (a.err, a.exerr, a.stage) != (b.err, b.exerr, b.stage)
 
 
 def _explanations(spec: ir.Spec, universe: Mapping[str, list[str]]) -> dict[str, dict[str, str]]:
@@ -307,10 +324,10 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
                       progress: Callable[[str], None] | None = None, *, explore_fn: Callable[..., Any] | None = None,
                       ) -> None:
     """Shortest runs for every item the checker covers on ``system`` (a bundled name or a file)."""
+    from checker import search
     from checker.counterexample import replay
     from checker.model import Model
     from checker.properties import load_properties
-    from checker import search
     from checker.system import bundled_systems, load_system
     path = bundled_systems().get(str(system), Path(system))
     sysdef = load_system(path, spec)
@@ -330,52 +347,143 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
     by_witness: dict[tuple[int, int], list[tuple[str, str]]] = {}
     for _k, _r, text, kind, where in items:
         by_witness.setdefault(where, []).append((kind, text))
-    program = [(tag, spec.instruction(m).mnemonic, axis) for tag, m, axis in model.program]
     for (state, choice), found in by_witness.items():
         trace = replay(result, "", None, end_state=state)
         choices = [st.choice for st in trace.steps] + [model.choices[choice]]
-        setup = {
-            "scan_ms": sysdef.scan_ms, "coarse_update_ms": sysdef.coarse_update_ms,
-            "axes": [], "program": [_program_entry(t, m, a, {}) for t, m, a in program],
-        }
-        for (name, g), ci in zip(model.axis_defs, trace.assignment):
-            variables = dict(g.variables)
-            variables.update(dict(g.configurations[ci].variables))
-            setup["axes"].append(_axis_entry(name, g.axis_type, g.chart, g.state, variables))
-        rungs = {t: False for t, _m, _a in program}
-        inputs: list[dict[str, Any]] = []
-        labels: list[str] = []
-        for c in choices:
-            entry: dict[str, Any] = {}
-            if c.kind == "raise":
-                rungs[c.tag] = True
-            elif c.kind == "drop":
-                rungs[c.tag] = False
-            entry["rungs"] = dict(rungs)
-            if c.kind == "raise" and c.operands:
-                entry["operands"] = {c.tag: dict(c.operands)}
-            if c.kind == "event":
-                entry["events"] = [{"axis": c.axis, "event": c.event}]
-            if c.kind == "prescan":
-                entry["prescan"] = True
-            inputs.append(entry)
-            labels.append(c.label())
         kind0, text0 = found[0]
         vid = f"{sysdef.name}-{kind0.rstrip('s').replace('_code', '')}-{_slug(text0.replace('/', '-').replace(':', '.'))}"
         what = "; ".join(f"{k.replace('_', ' ').rstrip('s')} {t}" for k, t in found)
-        cfg = ", ".join(g.configurations[ci].name for (_n, g), ci in zip(model.axis_defs, trace.assignment))
-        v = make_vector(
-            spec, vid=vid, kind="generated", name=f"shortest run to {what}",
-            description=(f"A shortest run ({len(inputs)} scans) found by breadth-first search of system "
-                         f"{sysdef.name} (configuration {cfg}) that covers: {what}."),
-            sources=[f"systems/{Path(sysdef.file).name}"], setup=setup, inputs=inputs, labels=labels,
-            origin=f"motionchart check --system {sysdef.name}", universe=suite.universe)
+        v = _run_vector(spec, model, sysdef, suite, trace.assignment, choices, vid, what)
         missing = [t for k, t in found if t not in v["covers"][k]]
         if missing:
             raise RuntimeError(f"vector {vid}: the replayed run does not cover {missing}; the abstraction is not exact")
         suite.vectors.append(v)
+    orders = _order_vectors(spec, model, result, suite, sysdef, replay)
     if progress:
-        progress(f"system {sysdef.name}: {result.states:,} states, {len(by_witness)} shortest runs")
+        progress(f"system {sysdef.name}: {result.states:,} states, {len(by_witness)} shortest runs, "
+                 f"{orders} check-order runs")
+
+
+def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment: Sequence[int],
+                choices: Sequence[Any], vid: str, what: str) -> dict[str, Any]:
+    """The vector of one run of the checker's model: its set-up, its inputs, the engine's observations."""
+    program = [(tag, spec.instruction(m).mnemonic, axis) for tag, m, axis in model.program]
+    # a call whose rung never rises never executes and changes nothing but its own
+    # (all-false) tag: the vector leaves it out, so it needs only the instructions it runs
+    used = {c.tag for c in choices if c.kind == "raise"}
+    calls = [(t, m, a) for t, m, a in program if t in used]
+    setup: dict[str, Any] = {
+        "scan_ms": sysdef.scan_ms, "coarse_update_ms": sysdef.coarse_update_ms,
+        "axes": [], "program": [_program_entry(t, m, a, {}) for t, m, a in calls],
+    }
+    for (name, g), ci in zip(model.axis_defs, assignment):
+        variables = dict(g.variables)
+        variables.update(dict(g.configurations[ci].variables))
+        setup["axes"].append(_axis_entry(name, g.axis_type, g.chart, g.state, variables))
+    rungs = {t: False for t, _m, _a in calls}
+    inputs: list[dict[str, Any]] = []
+    labels: list[str] = []
+    for c in choices:
+        entry: dict[str, Any] = {}
+        if c.kind == "raise" and c.tag is not None:
+            rungs[c.tag] = True
+        elif c.kind == "drop" and c.tag is not None:
+            rungs[c.tag] = False
+        entry["rungs"] = dict(rungs)
+        if c.kind == "raise" and c.operands:
+            entry["operands"] = {c.tag: dict(c.operands)}
+        if c.kind == "event":
+            entry["events"] = [{"axis": c.axis, "event": c.event}]
+        if c.kind == "prescan":
+            entry["prescan"] = True
+        inputs.append(entry)
+        labels.append(c.label())
+    cfg = ", ".join(g.configurations[ci].name for (_n, g), ci in zip(model.axis_defs, assignment))
+    return make_vector(
+        spec, vid=vid, kind="generated", name=f"shortest run to {what}",
+        description=(f"A shortest run ({len(inputs)} scans) found by breadth-first search of system "
+                     f"{sysdef.name} (configuration {cfg}) that covers: {what}."),
+        sources=[f"systems/{Path(sysdef.file).name}"], setup=setup, inputs=inputs, labels=labels,
+        origin=f"motionchart check --system {sysdef.name}", universe=suite.universe)
+
+
+#: states looked at per order pair before it is given up as not reachable in a system
+ORDER_CANDIDATES = 8
+
+
+def _order_vectors(spec: ir.Spec, model: Any, result: Any, suite: Suite, sysdef: Any, replay: Any) -> int:
+    """For every pair of adjacent checks of an instruction in this system that no vector
+    covers yet, the first state (in BFS order) where raising the call makes both fail:
+    there the order of the two decides the reported code.  Each candidate run is kept when
+    it does cover the pair (the second check really fails after the first, measured on the
+    run); a pair without one is explained as not reachable in the systems searched."""
+    covered = suite.covered().orders
+    wanted: dict[str, tuple[ir.Instruction, int]] = {}
+    for tag in model.tags:
+        ins = tag.instruction
+        for k in range(len(ins.checks) - 1):
+            item = order_item(ins, k)
+            if observable_order(ins, k) and item not in covered:
+                wanted[item] = (ins, k)
+    tries = dict.fromkeys(wanted, 0)
+    searched = set(wanted)
+    made = 0
+    for i in range(result.states):
+        if not wanted:
+            break
+        flat = result.state(i)
+        model.load(flat)
+        for ch in model.enabled():
+            if ch.kind != "raise" or not wanted:
+                continue
+            tag = model.system.tags[ch.tag]
+            ins = tag.instruction
+            env = dict(model.system.axes[tag.axis].expression_env())
+            env.update({f"op.{k}": v for k, v in tag.operands.items()})
+            env.update({f"op.{k}": v for k, v in ch.operands})
+            for k in range(len(ins.checks) - 1):
+                item = order_item(ins, k)
+                if item not in wanted:
+                    continue
+                a, b = ins.checks[k], ins.checks[k + 1]
+                try:
+                    both = bool(a.fails_when(env)) and bool(b.fails_when(env))
+                except Exception:
+                    both = False
+                if not both:
+                    continue
+                trace = replay(result, "", None, end_state=i)
+                choices = [st.choice for st in trace.steps] + [ch]
+                vid = f"{sysdef.name}-order-{_slug(item.replace('<', '-before-'))}"
+                v = _run_vector(spec, model, sysdef, suite, trace.assignment, choices, vid, f"check order {item}")
+                model.load(flat)
+                if item in v["covers"]["orders"]:
+                    suite.vectors.append(v)
+                    made += 1
+                    for it in v["covers"]["orders"]:
+                        wanted.pop(it, None)
+                else:
+                    tries[item] += 1
+                    if tries[item] >= ORDER_CANDIDATES:
+                        wanted.pop(item)
+    reasons = suite.explained.setdefault("orders", {})
+    for item in searched:
+        if item in suite.covered().orders:
+            reasons.pop(item, None)
+            continue
+        ins, k = next((t.instruction, k) for t in model.tags for k in range(len(t.instruction.checks) - 1)
+                      if order_item(t.instruction, k) == item)
+        a, b = ins.checks[k], ins.checks[k + 1]
+        if tries.get(item):
+            why = (f"in the search of system {sysdef.name}, `{a.fails_when.text}` and `{b.fails_when.text}` both "
+                   f"hold where {ins.id} executes, but in the first {tries[item]} such runs {b.id} is not still "
+                   f"failing when {a.id} fails first")
+        else:
+            why = (f"no state reached by the exhaustive search of system {sysdef.name} makes both "
+                   f"`{a.fails_when.text}` ({a.id}) and `{b.fails_when.text}` ({b.id}) hold where {ins.id} executes")
+        prev = reasons.get(item)
+        reasons[item] = why if prev is None else f"{prev}; {why}"
+    return made
 
 
 # --------------------------------------------------------------------------- the suite
@@ -416,12 +524,10 @@ def spec_digest(spec: ir.Spec) -> str:
     h = hashlib.sha256()
     for f in sorted(spec.files):
         p = Path(f)
-        name = p.name if not p.is_absolute() else p.name
+        name = p.name
         h.update(name.encode())
-        try:
+        with contextlib.suppress(OSError):
             h.update(p.read_bytes())
-        except OSError:
-            pass
     return h.hexdigest()[:16]
 
 

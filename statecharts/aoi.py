@@ -24,14 +24,16 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar, cast
 
 import jsonschema
 
+from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, SpecError, locate, node_path
-from statecharts.expr import Expr, ExprError, EvalError, check_names, parse_expression
-from statecharts.loader import _plain, bundled_spec_dir, read_yaml, schema_diagnostics
+from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
+from statecharts.loader import bundled_spec_dir, plain_data, read_yaml, schema_diagnostics
 from statecharts.rotary import effective_move_type, signed_distance, unwind
+from statecharts.values import as_float, as_int
 
 AOI_FORMAT = "motionchart-aoi/1"
 SUB_FORMAT = "motionchart-subinstruction/1"
@@ -45,7 +47,8 @@ _SCALAR = {"type": ["boolean", "integer", "number", "string"]}
 _PROV = {"source": _SOURCE, "interpretation": _INTERP}
 
 
-def _obj(required: Sequence[str], props: Mapping[str, Any]) -> dict[str, Any]:
+def schema_object(required: Sequence[str], props: Mapping[str, Any]) -> dict[str, Any]:
+    """A JSON Schema object with exactly ``props``, of which ``required`` must be present."""
     return {"type": "object", "additionalProperties": False, "required": list(required), "properties": dict(props)}
 
 
@@ -53,51 +56,51 @@ AOI_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/aoi-1.json",
     "description": "An add-on instruction: operands, tag type, error codes, ordered checks, recovery chart.",
-    **_obj(["format", "aoi"], {
+    **schema_object(["format", "aoi"], {
         "format": {"const": AOI_FORMAT},
-        "aoi": _obj(["id", "source", "execution", "inputs", "outputs", "errors", "checks", "recovery", "on_done",
+        "aoi": schema_object(["id", "source", "execution", "inputs", "outputs", "errors", "checks", "recovery", "on_done",
                      "rung_false", "prescan", "world"], {
             "id": _ID, **_PROV, "execution": {"enum": ["level", "edge"]}, "execution_source": _SOURCE,
-            "inputs": {"type": "array", "items": _obj(["name", "type", "source"], {
+            "inputs": {"type": "array", "items": schema_object(["name", "type", "source"], {
                 "name": _ID, "type": {"enum": ["axis", "handle", "BOOL", "DINT", "REAL"]}, "data_type": _ID,
                 "default": _SCALAR, **_PROV})},
-            "outputs": {"type": "array", "items": _obj(["name", "type", "source"], {
+            "outputs": {"type": "array", "items": schema_object(["name", "type", "source"], {
                 "name": _ID, "type": {"enum": ["BOOL", "DINT"]}, **_PROV})},
-            "errors": {"type": "array", "items": _obj(["code", "name", "source"], {
+            "errors": {"type": "array", "items": schema_object(["code", "name", "source"], {
                 "code": {"type": "integer"}, "name": {"type": "string"}, **_PROV})},
-            "checks": {"type": "array", "items": _obj(["id", "code", "fails", "source"], {
+            "checks": {"type": "array", "items": schema_object(["id", "code", "fails", "source"], {
                 "id": _ID, "code": {"type": "integer"}, "applies": {"type": "integer"}, "fails": _EXPR, **_PROV})},
-            "recovery": _obj(["initial", "states", "transitions", "source"], {
+            "recovery": schema_object(["initial", "states", "transitions", "source"], {
                 "initial": _ID, **_PROV,
-                "states": {"type": "array", "items": _obj(["id", "source"], {
+                "states": {"type": "array", "items": schema_object(["id", "source"], {
                     "id": _ID, "description": {"type": "string"}, "error": {"type": "integer"},
-                    "call": _obj(["instruction", "axis"], {
+                    "call": schema_object(["instruction", "axis"], {
                         "instruction": _ID, "axis": {"enum": ["phy", "pth"]}, "master": {"enum": ["phy", "pth"]},
                         "operands": {"type": "object", "additionalProperties": {"type": ["number", "string"]}}}),
                     **_PROV})},
-                "transitions": {"type": "array", "items": _obj(["from", "to", "when", "source"], {
+                "transitions": {"type": "array", "items": schema_object(["from", "to", "when", "source"], {
                     "from": _ID, "to": _ID, "when": _EXPR, **_PROV})}}),
-            "on_done": {"type": "array", "items": _obj(["when", "set", "source"], {
+            "on_done": {"type": "array", "items": schema_object(["when", "set", "source"], {
                 "when": _EXPR, "set": {"enum": ["path_verified", "handler.OnPath"]}, **_PROV})},
-            "rung_false": _obj(["clear", "source"], {
+            "rung_false": schema_object(["clear", "source"], {
                 "clear": {"type": "array", "items": _ID}, "abort_call": _ID, **_PROV}),
-            "prescan": _obj(["clear", "source"], {
+            "prescan": schema_object(["clear", "source"], {
                 "clear": {"type": "array", "items": _ID}, "forget": {"type": "array", "items": _ID}, **_PROV}),
-            "world": _obj(["objects", "source"], {
+            "world": schema_object(["objects", "source"], {
                 **_PROV,
-                "objects": {"type": "array", "minItems": 1, "items": _obj(["kind", "chart", "facts", "source"], {
+                "objects": {"type": "array", "minItems": 1, "items": schema_object(["kind", "chart", "facts", "source"], {
                     "kind": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL", "handler"]}, "chart": _ID, **_PROV,
                     "on_scan": {"type": "array", "items": _ID}, "stop": {"type": "array", "items": _ID},
                     "register": {"type": "array", "items": _ID},
-                    "setup": _obj(["rules"], {
+                    "setup": schema_object(["rules"], {
                         "variables": {"type": "object", "additionalProperties": _EXPR},
-                        "rules": {"type": "array", "items": _obj(["when"], {
+                        "rules": {"type": "array", "items": schema_object(["when"], {
                             "when": _EXPR, "state": _ID,
                             "variables": {"type": "object", "additionalProperties": _EXPR}})},
                         "then_set": {"type": "array", "items": _ID}}),
-                    "facts": {"type": "array", "items": _obj(["name", "source"], {
+                    "facts": {"type": "array", "items": schema_object(["name", "source"], {
                         "name": _ID, "when": _EXPR, "variable": _ID, **_PROV,
-                        "set": {"type": "array", "items": _obj(["value", "fire"], {
+                        "set": {"type": "array", "items": schema_object(["value", "fire"], {
                             "value": _SCALAR, "fire": {"type": "array", "minItems": 1, "items": _ID}})}})},
                 })},
             }),
@@ -109,21 +112,21 @@ SUB_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/subinstruction-1.json",
     "description": "A motion instruction as the add-on instruction calls it: ordered preconditions and completion.",
-    **_obj(["format", "instruction"], {
+    **schema_object(["format", "instruction"], {
         "format": {"const": SUB_FORMAT},
-        "instruction": _obj(["mnemonic", "name", "source", "axis_types", "checks", "completes"], {
+        "instruction": schema_object(["mnemonic", "name", "source", "axis_types", "checks", "completes"], {
             "mnemonic": _ID, "name": {"type": "string"}, **_PROV,
             "axis_types": {"type": "array", "items": _ID},
-            "checks": {"type": "array", "items": _obj(["fails", "err", "source"], {
+            "checks": {"type": "array", "items": schema_object(["fails", "err", "source"], {
                 "fails": _EXPR, "err": {"type": "integer", "minimum": 1}, **_PROV})},
-            "completes": _obj(["kind", "source"], {
+            "completes": schema_object(["kind", "source"], {
                 "kind": {"enum": ["home", "move", "gear", "redefine", "stop"]},
                 "scans": {"type": "integer", "minimum": 1}, **_PROV}),
         }),
     }),
 }
 
-_AXIS_PROPS = {
+_AXIS_PROPS: dict[str, dict[str, Any]] = {
     "type": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL"]},
     "position": {"type": "number"}, "velocity": {"type": "number"}, "unwind": {"type": "number", "minimum": 0},
     "homed": {"type": "boolean"}, "energized": {"type": "boolean"}, "faulted": {"type": "boolean"},
@@ -131,7 +134,7 @@ _AXIS_PROPS = {
     "direct_control": {"type": "boolean"}, "home_config_ok": {"type": "boolean"}, "home_position": {"type": "number"},
     "homing": {"type": "boolean"},
 }
-_HANDLER_PROPS = {
+_HANDLER_PROPS: dict[str, dict[str, Any]] = {
     "id": {"type": "integer", "minimum": 0}, "registered": {"type": "integer", "minimum": 0},
     "capacity": {"type": "integer", "minimum": 0}, "eState": {"type": "integer"},
     "mode": {"enum": ["physical", "virtual", "none", "maintenance"]},
@@ -148,21 +151,21 @@ SCENARIO_SCHEMA: dict[str, Any] = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/aoi-scenario-1.json",
     "description": "Handlers, axes and add-on instruction instances, then scans with expected observations.",
-    **_obj(["format", "name", "setup", "steps"], {
+    **schema_object(["format", "name", "setup", "steps"], {
         "format": {"const": SCENARIO_FORMAT}, "name": {"type": "string", "minLength": 1},
         "description": {"type": "string"}, "sources": {"type": "array", "items": {"type": "string"}},
         "covers": {"type": "array", "items": {"type": "string"}},
-        "setup": _obj(["handlers", "axes", "aoi"], {
+        "setup": schema_object(["handlers", "axes", "aoi"], {
             "scan_ms": {"type": "integer", "minimum": 1},
             "handlers": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                         "additionalProperties": _obj(["id"], {**_HANDLER_PROPS, **_CHART_SETUP})},
+                         "additionalProperties": schema_object(["id"], {**_HANDLER_PROPS, **_CHART_SETUP})},
             "axes": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                     "additionalProperties": _obj(["type"], {**_AXIS_PROPS, **_CHART_SETUP})},
+                     "additionalProperties": schema_object(["type"], {**_AXIS_PROPS, **_CHART_SETUP})},
             "aoi": {"type": "object", "minProperties": 1, "propertyNames": _ID,
                     "additionalProperties": {"type": "object", "propertyNames": _ID,
                                              "additionalProperties": _INPUT_VALUES}},
         }),
-        "steps": {"type": "array", "minItems": 1, "items": _obj([], {
+        "steps": {"type": "array", "minItems": 1, "items": schema_object([], {
             "name": {"type": "string"}, "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
             "prescan": {"type": "boolean"},
             "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
@@ -321,7 +324,7 @@ def _check_interpretations(f: str, tree: Any, errors: list[Diagnostic], root: Pa
     """Every `interpretation:` the file cites must exist in interpretations.yaml."""
     known: set[str] = set()
     doc = read_yaml(root / "interpretations.yaml", [])
-    listed = _plain(doc).get("interpretations") if isinstance(doc, Mapping) else None
+    listed = plain_data(doc).get("interpretations") if isinstance(doc, Mapping) else None
     if not isinstance(listed, list):
         return  # interpretations.yaml itself is wrong: the spec loader reports that
     known = {str(i.get("id")) for i in listed if isinstance(i, dict)}
@@ -365,14 +368,14 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         if len(errors) > before:
             continue
         _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
-        d = _plain(tree)["instruction"]
-        checks = []
+        d = plain_data(tree)["instruction"]
+        sub_checks: list[SubCheck] = []
         for i, c in enumerate(d["checks"]):
             names = SUB_NAMES | {"MoveType", "Speed", "Position", "Position.finite", "Speed.finite"}
             e = _exprs(f, tree, ("instruction", "checks", i, "fails"), c["fails"], names, errors)
             if e is not None:
-                checks.append(SubCheck(e, int(c["err"]), c["source"]))
-        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(checks), d["completes"]["kind"],
+                sub_checks.append(SubCheck(e, int(c["err"]), c["source"]))
+        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(sub_checks), d["completes"]["kind"],
                                    int(d["completes"].get("scans", 1)), d["source"]))
     if len(aoi_paths) != 1:
         errors.append(Diagnostic(str(bundled_spec_dir() / "aoi"), 1, 1, "", f"expected one add-on instruction file, found {len(aoi_paths)}"))
@@ -386,7 +389,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     errors.extend(schema_diagnostics(f, tree, AOI_SCHEMA, "an add-on instruction file"))
     if len(errors) > before:
         raise SpecError(errors)
-    d = _plain(tree)["aoi"]
+    d = plain_data(tree)["aoi"]
     inputs = tuple((i["name"], i["type"], i.get("default")) for i in d["inputs"])
     input_names = {n for n, _, _ in inputs}
     known = WORLD_NAMES | input_names | {f"{n}.finite" for n, t, _ in inputs if t == "REAL"}
@@ -394,7 +397,8 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     checks: list[AoiCheck] = []
     for i, c in enumerate(d["checks"]):
         if c["code"] not in codes:
-            errors.append(Diagnostic(f, *locate(tree, ("aoi", "checks", i, "code")), f"aoi.checks[{i}].code", f"code {c['code']} is not in aoi.errors"))
+            errors.append(Diagnostic(f, *locate(tree, ("aoi", "checks", i, "code")), f"aoi.checks[{i}].code",
+                                     f"code {c['code']} is not in aoi.errors"))
         e = _exprs(f, tree, ("aoi", "checks", i, "fails"), c["fails"], known, errors)
         if e is not None:
             checks.append(AoiCheck(c["id"], c["code"], c.get("applies"), e, c["source"], c.get("interpretation")))
@@ -414,7 +418,8 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
                     ops.append((k, e))
             call = Call(c["instruction"], c["axis"], c.get("master"), tuple(ops))
             if "error" not in s:
-                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "states", i)), f"aoi.recovery.states[{i}]", "a state with a call needs `error`"))
+                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "states", i)), f"aoi.recovery.states[{i}]",
+                                         "a state with a call needs `error`"))
         states.append(RecoveryState(s["id"], call, s.get("error"), s["source"]))
     ids = {s.id for s in states}
     for need in ("idle", "checking", "done", d["recovery"]["initial"]):
@@ -424,7 +429,8 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     for i, t in enumerate(d["recovery"]["transitions"]):
         for k in ("from", "to"):
             if t[k] not in ids:
-                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "transitions", i, k)), f"aoi.recovery.transitions[{i}].{k}", f"unknown state {t[k]!r}"))
+                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "transitions", i, k)),
+                                         f"aoi.recovery.transitions[{i}].{k}", f"unknown state {t[k]!r}"))
         e = _exprs(f, tree, ("aoi", "recovery", "transitions", i, "when"), t["when"], known, errors)
         if e is not None:
             transitions.append(RecoveryTransition(t["from"], t["to"], e))
@@ -537,7 +543,8 @@ def _load_bindings(f: str, tree: Any, world: Mapping[str, Any], spec_dir: str | 
         fields = frozenset(_HANDLER_PROPS if o["kind"] == "handler" else _AXIS_PROPS)
         states = {st.id for st in chart.states}
 
-        def assignments(node: Mapping[str, str], parts: tuple[Any, ...]) -> tuple[tuple[str, Expr], ...]:
+        def assignments(node: Mapping[str, str], parts: tuple[Any, ...], variables: set[str] = variables,
+                        chart: ir.Chart = chart, fields: frozenset[str] = fields) -> tuple[tuple[str, Expr], ...]:
             got = []
             for name, text in node.items():
                 if name not in variables:
@@ -653,8 +660,8 @@ class ChartRunner:
         env: dict[str, object] = {v.name: snap[1][i] for i, v in enumerate(self.chart.variables)}
         env["active"] = snap[0]
         env["state"] = self.leaf(snap[0])[0]
-        out = {fb.name: (fb.when(env) if fb.when is not None else env[fb.variable])  # type: ignore[index]
-               for fb in binding.facts}
+        out = {fb.name: (fb.when(env) if fb.when is not None else env[str(fb.variable)])
+               for fb in binding.facts}  # the loader gives every fact a `when` or a `variable`
         if len(self._facts) >= self.MEMO_LIMIT:
             self._facts.clear()
         self._facts[key] = out
@@ -678,7 +685,7 @@ class ChartObject:
     """A world object run by a chart: its binding, its runner and its current snapshot."""
 
     #: facts kept by the object itself when its binding does not read them from the chart
-    PLAIN: dict[str, object] = {}
+    PLAIN: ClassVar[dict[str, object]] = {}
 
     def __init__(self, name: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
         self.name = name
@@ -755,7 +762,7 @@ class Axis(ChartObject):
     (faulted, shut down, energized, ...) come from the chart through the binding.
     """
 
-    PLAIN = {"homed": True, "homing": False, "direct_control": False}
+    PLAIN: ClassVar[dict[str, object]] = {"homed": True, "homing": False, "direct_control": False}
 
     def __init__(self, name: str, type: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
         super().__init__(name, binding, runner, snap)
@@ -850,7 +857,7 @@ class Axis(ChartObject):
         return (self.snap, tuple(getattr(self, k) for k in self.PLANNER), tuple(sorted(self.plain.items())))
 
     def restore(self, snap: tuple[object, ...]) -> None:
-        chart, planner, plain = snap  # type: ignore[misc]
+        chart, planner, plain = cast("tuple[tuple[frozenset[str], tuple[object, ...]], tuple[object, ...], tuple[tuple[str, object], ...]]", snap)
         self.snap = chart
         for k, v in zip(self.PLANNER, planner):
             setattr(self, k, v)
@@ -879,7 +886,7 @@ class Handler(ChartObject):
         for e in self.binding.register:
             self.fire(e)
         after = self.registered
-        return int(after) if after != before else 0  # type: ignore[call-overload]
+        return as_int(after) if after != before else 0
 
     def observe(self) -> dict[str, object]:
         out = {"eState": self.eState, "mode": self.mode, "OnPath": self.OnPath, "registered": self.registered,
@@ -892,7 +899,7 @@ class Handler(ChartObject):
         return (self.snap, self.id, self.phy_axis, self.pth_axis)
 
     def restore(self, snap: tuple[object, ...]) -> None:
-        self.snap, self.id, self.phy_axis, self.pth_axis = snap  # type: ignore[assignment]
+        self.snap, self.id, self.phy_axis, self.pth_axis = cast("tuple[tuple[frozenset[str], tuple[object, ...]], int, str, str]", snap)
 
 
 @dataclass
@@ -994,7 +1001,7 @@ class World:
 
     def restore(self, snap: tuple[object, ...]) -> None:
         """Put the world back into the state :meth:`snapshot` returned (the scan index is kept)."""
-        hs, axs, insts = snap  # type: ignore[misc]
+        hs, axs, insts = cast("tuple[tuple[tuple[str, Any], ...], tuple[tuple[str, Any], ...], tuple[tuple[Any, ...], ...]]", snap)
         for n, s in hs:
             self.handlers[n].restore(s)
         for n, s in axs:
@@ -1028,7 +1035,7 @@ class World:
         env.update(pth.env("pth"))
         mt = inst.inputs.get("Cfg_MoveType")
         tol = inst.inputs.get("Cfg_RotaryShortestTOL")
-        tol_f = float(tol) if _finite(tol) else 0.0  # type: ignore[arg-type]
+        tol_f = as_float(tol) if _finite(tol) else 0.0
         mt_i = int(mt) if isinstance(mt, int) and not isinstance(mt, bool) else -1
         eff = effective_move_type(phy.position, pth.position, phy.unwind, mt_i, tol_f)
         dist = signed_distance(phy.position, pth.position, phy.unwind, eff)
@@ -1103,8 +1110,8 @@ class World:
                 if c.fails(env):
                     self._error(inst, c.code)
                     return
-            inst.move_type = int(env["move.type"])  # type: ignore[call-overload]
-            inst.move_target = float(env["move.target"])  # type: ignore[arg-type]
+            inst.move_type = as_int(env["move.type"])
+            inst.move_target = as_float(env["move.target"])
         for _ in range(len(self.spec.states) + 1):
             nxt = next((t.target for t in self.spec.transitions
                         if t.source_state == inst.state and t.when(env)), None)
@@ -1158,9 +1165,9 @@ class World:
             axis.geared = False
         elif sub.kind == "move":
             axis.geared = False
-            axis.move_speed = float(ops["Speed"])  # type: ignore[arg-type]
-            axis.move_remaining = signed_distance(axis.position, float(ops["Position"]), axis.unwind,  # type: ignore[arg-type]
-                                                  int(ops["MoveType"]))  # type: ignore[call-overload]
+            axis.move_speed = as_float(ops["Speed"])
+            axis.move_remaining = signed_distance(axis.position, as_float(ops["Position"]), axis.unwind,
+                                                  as_int(ops["MoveType"]))
             if axis.move_remaining == 0:
                 inst.call.done = True
         elif sub.kind == "gear":
@@ -1168,7 +1175,7 @@ class World:
             axis.master = str(inst.inputs["Ref_AxisPth"])
             inst.call.done = True  # DN = gearing initiated
         elif sub.kind == "redefine":
-            axis.position = unwind(float(ops["Position"]), axis.unwind)  # type: ignore[arg-type]
+            axis.position = unwind(as_float(ops["Position"]), axis.unwind)
             inst.call.done = True
 
     def _motion_update(self) -> None:
@@ -1219,9 +1226,8 @@ class World:
                 c.aborted = True
                 continue
             axis = self.axes[c.axis]
-            if c.instruction.kind == "home" and axis.home_scans_left <= 0 and axis.homed:
-                c.done = True
-            elif c.instruction.kind == "move" and axis.move_remaining == 0:
+            if ((c.instruction.kind == "home" and axis.home_scans_left <= 0 and axis.homed)
+                    or (c.instruction.kind == "move" and axis.move_remaining == 0)):
                 c.done = True
 
     def observe(self) -> dict[str, dict[str, object]]:
@@ -1356,7 +1362,7 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
     errors.extend(_oversized_integers(name, tree))
     if errors:
         raise ScenarioError(errors)
-    doc = _plain(tree)
+    doc = plain_data(tree)
 
     def err(parts: tuple[Any, ...], message: str) -> None:
         line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
@@ -1504,7 +1510,7 @@ def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
     hrun = chart_runner(charts[hb.chart], scan_ms)
     for n, h in setup["handlers"].items():
         fields = {**HANDLER_DEFAULTS, **{k: v for k, v in h.items() if k not in CHART_SETUP_KEYS}}
-        obj = Handler(n, hb, hrun, _initial_snap(hb, hrun, fields, h), id=int(fields["id"]),  # type: ignore[call-overload]
+        obj = Handler(n, hb, hrun, _initial_snap(hb, hrun, fields, h), id=as_int(fields["id"]),
                       phy_axis=str(fields["phy_axis"]), pth_axis=str(fields["pth_axis"]))
         for name in hb.then_set:
             obj.set_fact(name, fields[name])
@@ -1522,14 +1528,14 @@ def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
         for k in ("homed", "homing", "direct_control"):
             if k in ax.plain:
                 ax.plain[k] = fields[k]
-        ax.unwind = float(fields["unwind"])  # type: ignore[arg-type]
-        ax.position = unwind(float(fields["position"]), ax.unwind)  # type: ignore[arg-type]
+        ax.unwind = as_float(fields["unwind"])
+        ax.position = unwind(as_float(fields["position"]), ax.unwind)
         ax.control_mode = str(fields["control_mode"])
         ax.home_config_ok = bool(fields["home_config_ok"])
-        ax.home_position = float(fields["home_position"])  # type: ignore[arg-type]
+        ax.home_position = as_float(fields["home_position"])
         for e in a.get("events", []):
             ax.fire(e)
-        ax.velocity = float(fields["velocity"])  # type: ignore[arg-type]
+        ax.velocity = as_float(fields["velocity"])
         axes.append(ax)
     instances = []
     for n, ops in setup["aoi"].items():
@@ -1542,7 +1548,7 @@ def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
 def run_aoi_scenario(scenario: AoiScenario, spec: AoiSpec) -> Any:
     """Run the scenario; returns a :class:`statecharts.scenario.ScenarioResult`."""
     from statecharts.scan import ScanRecord
-    from statecharts.scenario import Mismatch, ScanRow, ScenarioResult, _same
+    from statecharts.scenario import Mismatch, ScanRow, ScenarioResult, same_value
 
     world = build_world(spec, scenario.setup)
     before = world.observe()
@@ -1571,7 +1577,8 @@ def run_aoi_scenario(scenario: AoiScenario, spec: AoiSpec) -> Any:
             before = obs
         for obj, fld, expected in step.expect:
             actual = before[obj][fld]
-            if not _same(expected, actual):
+            if not same_value(expected, actual):
                 mismatches.append(Mismatch(step.index, step.name, world.index, obj, fld, expected, actual, step.line))
+    # an AoiScenario stands in for a Scenario here (callers read only the fields both have)
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches))  # type: ignore[arg-type]
 

@@ -34,6 +34,8 @@ for one axis, :class:`statecharts.engine.AxisInstance`.
 
 from __future__ import annotations
 
+from typing import Any
+
 from statemachine import StateChart
 
 from statecharts import ir
@@ -59,7 +61,7 @@ def _chart(chart_id: str, spec: ir.Spec | None) -> ir.Chart:
         raise KeyError(f"unknown chart {chart_id!r}; charts: {known}") from None
 
 
-def chart_class(chart_id: str, spec: ir.Spec | None = None) -> type[StateChart]:
+def chart_class(chart_id: str, spec: ir.Spec | None = None) -> type[StateChart[Any]]:
     """The python-statemachine ``StateChart`` class of chart ``chart_id``.
 
     ``spec`` defaults to the bundled specification.  Instantiate it with

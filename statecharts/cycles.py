@@ -25,6 +25,7 @@ Cost: O(leaves x valuations x transitions per leaf) guard evaluations per part.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import itertools
 from collections.abc import Mapping, Sequence
@@ -66,7 +67,7 @@ class _Chart:
         self.by_id = {s.id: s for s in chart.states}
         self.leaves = [s.id for s in chart.leaf_states()]
         eventless: dict[str, list[ir.Transition]] = {}
-        for i, t in sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0])):
+        for _i, t in sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0])):
             if t.event is None:
                 eventless.setdefault(t.source, []).append(t)
         # what the engine tries in a leaf: the leaf's own transitions first, then each ancestor's
@@ -197,10 +198,8 @@ def _start_values(chart: ir.Chart, name: str, domain: tuple[object, ...] | None)
     unbounded number).  A cycle found from a sample is a real one; none found from a
     sample proves nothing, and the engine's bound stays the guard."""
     initial: object = None
-    try:
+    with contextlib.suppress(KeyError):
         initial = chart.variable(name).initial
-    except KeyError:
-        pass
     if domain is not None:
         if len(domain) <= SMALL_DOMAIN:
             return domain
@@ -245,7 +244,7 @@ def _run(
             for a in effects:
                 if a.target in wanted:
                     env[a.target] = a.value(env)
-        except Exception:  # noqa: BLE001 - a failing action ends the run; the engine reports it
+        except Exception:
             break
         new_vals = tuple(env[n] for n in order)
         if any(domains.get(n) is not None and v not in (domains.get(n) or ()) for n, v in zip(order, new_vals)):
@@ -261,6 +260,6 @@ def _first_enabled(candidates: Sequence[ir.Transition], env: Mapping[str, object
         try:
             if t.guard is None or t.guard(env):
                 return t
-        except Exception:  # noqa: BLE001 - a guard failing on some value cannot prove a cycle
+        except Exception:
             return None
     return None

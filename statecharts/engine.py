@@ -97,13 +97,14 @@ def _action_method(actions: tuple[Assignment, ...]) -> Callable[..., None]:
     return method
 
 
-def _ordered(transitions: Iterable[ir.Transition]) -> list[ir.Transition]:
+def ordered_transitions(transitions: Iterable[ir.Transition]) -> list[ir.Transition]:
+    """Transitions in the order they are tried: by priority, then in document order."""
     indexed = list(enumerate(transitions))
     return [t for _, t in sorted(indexed, key=lambda it: (it[1].priority, it[0]))]
 
 
-@functools.lru_cache(maxsize=None)
-def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
+@functools.cache
+def machine_class(chart: ir.Chart) -> tuple[type[StateChart[Any]], type[ChartModel]]:
     """The python-statemachine class for ``chart`` and the model class its names resolve on.
 
     This is also the documented way to embed a chart in one's own code: instantiate
@@ -142,7 +143,7 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
             }
         on: dict[str, list[dict[str, Any]]] = {}
         eventless: list[dict[str, Any]] = []
-        for t in _ordered(x for x in chart.transitions if x.source == state.id):
+        for t in ordered_transitions(x for x in chart.transitions if x.source == state.id):
             td: dict[str, Any] = {"target": t.target}
             if t.guard is not None:
                 model_attrs[f"guard__{t.id}"] = (
@@ -161,7 +162,7 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart], type[ChartModel]]:
             d["transitions"] = eventless
         return d
 
-    states = {s.id: define(s) for s in by_parent.get(None, []) if s.kind is not ir.StateKind.HISTORY}
+    states: dict[str, Any] = {s.id: define(s) for s in by_parent.get(None, []) if s.kind is not ir.StateKind.HISTORY}
     states[chart.root_initial]["initial"] = True
     model_cls = type(f"{chart.id}Model", (ChartModel,), model_attrs)
     machine = create_machine_class_from_definition(
@@ -287,7 +288,7 @@ class AxisInstance:
         return env
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def chart_event_actions(chart: ir.Chart) -> dict[str, tuple[Assignment, ...]]:
     """Environment events change drive-model variables before the chart sees them."""
     return {e.name: e.actions for e in chart.events}

@@ -32,7 +32,7 @@ import re
 import warnings
 from collections.abc import Callable, Collection, Mapping, MutableMapping
 from dataclasses import dataclass, field
-from typing import Final, Literal, TypeAlias
+from typing import Any, Final, Literal, TypeAlias, cast
 
 __all__ = [
     "Assignment",
@@ -47,6 +47,11 @@ __all__ = [
 
 Env: TypeAlias = Mapping[str, object]
 Fn: TypeAlias = Callable[[Env], object]
+
+#: The operator closures below compute on values whose types the language checks when
+#: the operator runs (a spec decides them), so they are typed as dynamic.
+_Dyn: TypeAlias = Any
+_DynFn: TypeAlias = Callable[[Mapping[str, Any]], Any]
 
 #: Longest accepted expression text, in characters.
 MAX_LENGTH: Final = 2000
@@ -153,7 +158,7 @@ _LEADING_WS = " \t\f\r\n"
 class _Source:
     """Maps parser positions of a (stripped) text back to offsets into the original."""
 
-    __slots__ = ("original", "body", "base", "starts", "lines")
+    __slots__ = ("base", "body", "lines", "original", "starts")
 
     def __init__(self, original: str, body: str, base: int) -> None:
         self.original = original
@@ -283,43 +288,42 @@ class LimitError(ValueError):
     """An expression would build a value larger than the language allows."""
 
 
-def _mul(a: object, b: object) -> object:
+def _mul(a: _Dyn, b: _Dyn) -> object:
     ta = type(a)
     tb = type(b)
     if ta is int and tb is int:
-        r = a * b  # type: ignore[operator]
+        r = a * b
         if -MAX_INT <= r <= MAX_INT:
             return r
         raise LimitError(f"integer product beyond 64 bits (at most {MAX_INT} in magnitude)")
     if (ta is int or ta is float or ta is bool) and (tb is int or tb is float or tb is bool):
-        return a * b  # type: ignore[operator]
+        return a * b
     if isinstance(a, _SEQUENCE_TYPES) and isinstance(b, int):
         if len(a) * b > MAX_SIZE:
             raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
-    elif isinstance(b, _SEQUENCE_TYPES) and isinstance(a, int):
-        if len(b) * a > MAX_SIZE:
-            raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
-    return a * b  # type: ignore[operator]
+    elif isinstance(b, _SEQUENCE_TYPES) and isinstance(a, int) and len(b) * a > MAX_SIZE:
+        raise LimitError(f"sequence repetition longer than {MAX_SIZE}")
+    return a * b
 
 
-def _add(a: object, b: object) -> object:
-    r = a + b  # type: ignore[operator]
-    if type(r) in _SEQUENCE_TYPES and len(r) > MAX_SIZE:  # type: ignore[arg-type]
+def _add(a: _Dyn, b: _Dyn) -> object:
+    r = a + b
+    if type(r) in _SEQUENCE_TYPES and len(r) > MAX_SIZE:
         raise LimitError(f"concatenation longer than {MAX_SIZE}")
     return r
 
 
-def _mod(a: object, b: object) -> object:
+def _mod(a: _Dyn, b: _Dyn) -> object:
     if isinstance(a, (str, bytes)):
         raise TypeError("string formatting with '%' is not allowed in a spec expression")
-    return a % b  # type: ignore[operator]
+    return a % b
 
 
 def _is_immutable(value: object, depth: int = 0) -> bool:
     if value is None or type(value) in (bool, int, float, str):
         return True
     if depth < MAX_DEPTH and type(value) in (tuple, frozenset):
-        return all(_is_immutable(v, depth + 1) for v in value)  # type: ignore[attr-defined]
+        return all(_is_immutable(v, depth + 1) for v in cast("tuple[object, ...]", value))
     return False
 
 
@@ -330,10 +334,10 @@ def _is_immutable(value: object, depth: int = 0) -> bool:
 # through a closure call in the inner loop.
 
 _BinFactories: TypeAlias = tuple[
-    Callable[[Fn, Fn], Fn], Callable[[Fn, object], Fn], Callable[[object, Fn], Fn]
+    Callable[[_DynFn, _DynFn], Fn], Callable[[_DynFn, _Dyn], Fn], Callable[[_Dyn, _DynFn], Fn]
 ]
 
-_BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], object], _BinFactories]]] = {
+_BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[_Dyn, _Dyn], object], _BinFactories]]] = {
     ast.Add: (
         "+",
         _add,
@@ -345,11 +349,11 @@ _BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], ob
     ),
     ast.Sub: (
         "-",
-        lambda a, b: a - b,  # type: ignore[operator]
+        lambda a, b: a - b,
         (
-            lambda l, r: lambda env: l(env) - r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) - c,  # type: ignore[operator]
-            lambda c, r: lambda env: c - r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) - r(env),
+            lambda l, c: lambda env: l(env) - c,
+            lambda c, r: lambda env: c - r(env),
         ),
     ),
     ast.Mult: (
@@ -363,20 +367,20 @@ _BINOPS: Final[dict[type[ast.operator], tuple[str, Callable[[object, object], ob
     ),
     ast.Div: (
         "/",
-        lambda a, b: a / b,  # type: ignore[operator]
+        lambda a, b: a / b,
         (
-            lambda l, r: lambda env: l(env) / r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) / c,  # type: ignore[operator]
-            lambda c, r: lambda env: c / r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) / r(env),
+            lambda l, c: lambda env: l(env) / c,
+            lambda c, r: lambda env: c / r(env),
         ),
     ),
     ast.FloorDiv: (
         "//",
-        lambda a, b: a // b,  # type: ignore[operator]
+        lambda a, b: a // b,
         (
-            lambda l, r: lambda env: l(env) // r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) // c,  # type: ignore[operator]
-            lambda c, r: lambda env: c // r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) // r(env),
+            lambda l, c: lambda env: l(env) // c,
+            lambda c, r: lambda env: c // r(env),
         ),
     ),
     ast.Mod: (
@@ -401,15 +405,15 @@ _REFUSED_BINOPS: Final[dict[type[ast.operator], str]] = {
 }
 
 
-def _contains(a: object, b: object) -> bool:
-    return a in b  # type: ignore[operator]
+def _contains(a: _Dyn, b: _Dyn) -> bool:
+    return a in b
 
 
-def _not_contains(a: object, b: object) -> bool:
-    return a not in b  # type: ignore[operator]
+def _not_contains(a: _Dyn, b: _Dyn) -> bool:
+    return a not in b
 
 
-_CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[object, object], object], _BinFactories]]] = {
+_CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[_Dyn, _Dyn], object], _BinFactories]]] = {
     ast.Eq: (
         lambda a, b: a == b,
         (
@@ -427,66 +431,66 @@ _CMPOPS: Final[dict[type[ast.cmpop], tuple[Callable[[object, object], object], _
         ),
     ),
     ast.Lt: (
-        lambda a, b: a < b,  # type: ignore[operator]
+        lambda a, b: a < b,
         (
-            lambda l, r: lambda env: l(env) < r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) < c,  # type: ignore[operator]
-            lambda c, r: lambda env: c < r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) < r(env),
+            lambda l, c: lambda env: l(env) < c,
+            lambda c, r: lambda env: c < r(env),
         ),
     ),
     ast.LtE: (
-        lambda a, b: a <= b,  # type: ignore[operator]
+        lambda a, b: a <= b,
         (
-            lambda l, r: lambda env: l(env) <= r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) <= c,  # type: ignore[operator]
-            lambda c, r: lambda env: c <= r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) <= r(env),
+            lambda l, c: lambda env: l(env) <= c,
+            lambda c, r: lambda env: c <= r(env),
         ),
     ),
     ast.Gt: (
-        lambda a, b: a > b,  # type: ignore[operator]
+        lambda a, b: a > b,
         (
-            lambda l, r: lambda env: l(env) > r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) > c,  # type: ignore[operator]
-            lambda c, r: lambda env: c > r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) > r(env),
+            lambda l, c: lambda env: l(env) > c,
+            lambda c, r: lambda env: c > r(env),
         ),
     ),
     ast.GtE: (
-        lambda a, b: a >= b,  # type: ignore[operator]
+        lambda a, b: a >= b,
         (
-            lambda l, r: lambda env: l(env) >= r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) >= c,  # type: ignore[operator]
-            lambda c, r: lambda env: c >= r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) >= r(env),
+            lambda l, c: lambda env: l(env) >= c,
+            lambda c, r: lambda env: c >= r(env),
         ),
     ),
     ast.In: (
         _contains,
         (
-            lambda l, r: lambda env: l(env) in r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) in c,  # type: ignore[operator]
-            lambda c, r: lambda env: c in r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) in r(env),
+            lambda l, c: lambda env: l(env) in c,
+            lambda c, r: lambda env: c in r(env),
         ),
     ),
     ast.NotIn: (
         _not_contains,
         (
-            lambda l, r: lambda env: l(env) not in r(env),  # type: ignore[operator]
-            lambda l, c: lambda env: l(env) not in c,  # type: ignore[operator]
-            lambda c, r: lambda env: c not in r(env),  # type: ignore[operator]
+            lambda l, r: lambda env: l(env) not in r(env),
+            lambda l, c: lambda env: l(env) not in c,
+            lambda c, r: lambda env: c not in r(env),
         ),
     ),
 }
 
 _REFUSED_CMPOPS: Final[dict[type[ast.cmpop], str]] = {ast.Is: "is", ast.IsNot: "is not"}
 
-_CMP_NAME_CONST: Final[dict[type[ast.cmpop], Callable[[str, object], Fn]]] = {
+_CMP_NAME_CONST: Final[dict[type[ast.cmpop], Callable[[str, _Dyn], _DynFn]]] = {
     ast.Eq: lambda k, c: lambda env: env[k] == c,
     ast.NotEq: lambda k, c: lambda env: env[k] != c,
-    ast.Lt: lambda k, c: lambda env: env[k] < c,  # type: ignore[operator]
-    ast.LtE: lambda k, c: lambda env: env[k] <= c,  # type: ignore[operator]
-    ast.Gt: lambda k, c: lambda env: env[k] > c,  # type: ignore[operator]
-    ast.GtE: lambda k, c: lambda env: env[k] >= c,  # type: ignore[operator]
-    ast.In: lambda k, c: lambda env: env[k] in c,  # type: ignore[operator]
-    ast.NotIn: lambda k, c: lambda env: env[k] not in c,  # type: ignore[operator]
+    ast.Lt: lambda k, c: lambda env: env[k] < c,
+    ast.LtE: lambda k, c: lambda env: env[k] <= c,
+    ast.Gt: lambda k, c: lambda env: env[k] > c,
+    ast.GtE: lambda k, c: lambda env: env[k] >= c,
+    ast.In: lambda k, c: lambda env: env[k] in c,
+    ast.NotIn: lambda k, c: lambda env: env[k] not in c,
 }
 
 
@@ -539,7 +543,7 @@ class _Node:
     """A compiled sub-expression: its closure, its value when it is a constant, and
     (for a tuple/list/set display of constants) the constant members."""
 
-    __slots__ = ("fn", "const", "value", "members", "key")
+    __slots__ = ("const", "fn", "key", "members", "value")
 
     def __init__(self, fn: Fn, const: bool = False, value: object = None) -> None:
         self.fn = fn
@@ -611,9 +615,9 @@ class _Compiler:
     def read(self, node: ast.expr) -> _Node:
         key, off = self.path(node)
         self.names.setdefault(key, off)
-        node = _Node(lambda env: env[key])
-        node.key = key
-        return node
+        leaf = _Node(lambda env: env[key])
+        leaf.key = key
+        return leaf
 
     # -- dispatch
 
@@ -725,9 +729,11 @@ class _Compiler:
             else:
                 fn = lambda env: not f(env)  # noqa: E731
         elif isinstance(node.op, ast.USub):
-            fn = lambda env: -f(env)  # type: ignore[operator]  # noqa: E731
+            dyn: _DynFn = f
+            fn = lambda env: -dyn(env)  # noqa: E731
         else:
-            fn = lambda env: +f(env)  # type: ignore[operator]  # noqa: E731
+            pos: _DynFn = f
+            fn = lambda env: +pos(env)  # noqa: E731
         return _folded(fn) if operand.const else _Node(fn)
 
     def binop(self, node: ast.BinOp) -> _Node:

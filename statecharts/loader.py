@@ -25,6 +25,7 @@ unknown charts...).
 
 from __future__ import annotations
 
+import copy
 import functools
 import itertools
 import json
@@ -39,16 +40,26 @@ from typing import Any
 
 import jsonschema
 from ruamel.yaml import YAML
+from ruamel.yaml.anchor import Anchor
+from ruamel.yaml.comments import CommentedMap, CommentedSeq, Format, LineCol
 from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
+from ruamel.yaml.tag import Tag
 
 from statecharts import ir
 from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
-from statecharts.inputs import MAX_INPUT_BYTES, read_input, shown_name
 from statecharts.expr import (
-    KINDS, Assignment, Expr, ExprError, check_names, parse_assignment, parse_expression, result_kinds,
+    KINDS,
+    Assignment,
+    Expr,
+    ExprError,
+    check_names,
+    parse_assignment,
+    parse_expression,
+    result_kinds,
 )
+from statecharts.inputs import MAX_INPUT_BYTES, read_input, shown_name
 
 SPEC_FORMAT = "motionchart-spec/1"
 MAX_FILE_BYTES = MAX_INPUT_BYTES
@@ -140,7 +151,7 @@ class _Node:
     (the schema would have let such a key through unchecked), so it fails loudly.
     """
 
-    __slots__ = ("kind", "keys", "raw")
+    __slots__ = ("keys", "kind", "raw")
 
     def __init__(self, raw: Any, kind: str) -> None:
         self.kind = kind
@@ -203,15 +214,15 @@ def spec_files(paths: Sequence[Path | str] | None = None) -> list[Path]:
 # --------------------------------------------------------------------------- YAML
 
 
-def _plain(node: Any) -> Any:
+def plain_data(node: Any) -> Any:
     """ruamel round-trip tree -> plain dicts/lists (for the JSON Schema validator).
 
     Only called on trees that passed :func:`tree_diagnostics` (bounded depth and size).
     """
     if isinstance(node, dict):
-        return {str(k): _plain(v) for k, v in node.items()}
+        return {str(k): plain_data(v) for k, v in node.items()}
     if isinstance(node, list):
-        return [_plain(v) for v in node]
+        return [plain_data(v) for v in node]
     if isinstance(node, str):
         return str(node)
     if isinstance(node, bool):
@@ -287,6 +298,9 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
 
 def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
     """:func:`read_yaml` on bytes already read (``name`` is the file shown in diagnostics)."""
+    seen = _remembered_tree(name, raw)
+    if seen is not None:
+        return seen
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -314,14 +328,62 @@ def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: s
         line, col = _deep_event(text)
         errors.append(Diagnostic(name, line, col, "", f"nesting deeper than {MAX_YAML_DEPTH} levels"))
         return None
-    except Exception as exc:  # noqa: BLE001 - any parser failure on third-party text is a user error
+    except Exception as exc:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         line, col = (mark.line + 1, mark.column + 1) if mark is not None else (1, 1)
         errors.append(Diagnostic(name, line, col, "", f"YAML error: {exc}".splitlines()[0]))
         return None
     problems, fatal = tree_diagnostics(name, tree, what=what)
     errors.extend(problems)
+    if not problems:
+        _remember_tree(name, raw, tree)
     return None if fatal else tree
+
+
+#: Trees of files read cleanly, by file name and content: the spec, the scenarios and the
+#: checker's files are read again and again in one process (tests, generation), and
+#: parsing with positions is the slow part of loading.  Callers get their own copy.
+_TREES: dict[tuple[str, bytes], Any] = {}
+_TREES_MAX_BYTES = 16_000_000
+_trees_bytes = 0
+
+
+def _remember_tree(name: str, raw: bytes, tree: Any) -> None:
+    global _trees_bytes
+    if _trees_bytes + len(raw) > _TREES_MAX_BYTES:
+        _TREES.clear()
+        _trees_bytes = 0
+    _TREES[(name, raw)] = _copy_tree(tree)
+    _trees_bytes += len(raw)
+
+
+def _remembered_tree(name: str, raw: bytes) -> Any | None:
+    tree = _TREES.get((name, raw))
+    return None if tree is None else _copy_tree(tree)
+
+
+def _copy_tree(node: Any) -> Any:
+    """A copy of a round-trip tree: new mappings and sequences with the same positions
+    (``lc``), tags and anchors; scalars are shared (immutable), comments are left out."""
+    if isinstance(node, CommentedMap):
+        m = CommentedMap()
+        for k, v in node.items():
+            m[k] = _copy_tree(v)
+        _share_attributes(node, m)
+        return m
+    if isinstance(node, CommentedSeq):
+        s = CommentedSeq(_copy_tree(v) for v in node)
+        _share_attributes(node, s)
+        return s
+    if isinstance(node, dict | list):
+        return copy.deepcopy(node)
+    return node
+
+
+def _share_attributes(old: Any, new: Any) -> None:
+    for attrib in (LineCol.attrib, Format.attrib, Anchor.attrib, Tag.attrib):
+        if hasattr(old, attrib):
+            setattr(new, attrib, getattr(old, attrib))
 
 
 def read_document(path: Path, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
@@ -361,7 +423,7 @@ def read_document(path: Path, errors: list[Diagnostic], *, what: str = "file") -
         return None if fatal else tree
     positioned = parse_yaml_bytes(name, raw, [], what=what)
     try:
-        same = positioned is not None and _plain(positioned) == tree
+        same = positioned is not None and plain_data(positioned) == tree
     except RecursionError:
         same = False
     return positioned if same else tree
@@ -450,7 +512,7 @@ def _deep_event(text: str) -> tuple[int, int]:
                     return event.start_mark.line + 1, event.start_mark.column + 1
             elif isinstance(event, CollectionEndEvent):
                 depth -= 1
-    except Exception:  # noqa: BLE001 - only a position is wanted; line 1 will do
+    except Exception:
         pass
     return 1, 1
 
@@ -472,7 +534,11 @@ def _instance_text(value: Any) -> str:
 
 def _expected(err: jsonschema.ValidationError) -> str:
     """What the schema wanted, in words (``err.message`` can quote a whole subtree)."""
-    v, spec, inst = err.validator, err.validator_value, err.instance
+    # the schema keyword's argument: its type depends on the keyword checked below
+    v = err.validator
+    inst: Any = err.instance
+    spec: Any = err.validator_value
+    schema: Any = err.schema
     if v == "type":
         kinds = [spec] if isinstance(spec, str) else list(spec)
         return f"expected {' or '.join(_TYPE_NAMES.get(k, k) for k in kinds)}, got {_instance_text(inst)}"
@@ -493,7 +559,7 @@ def _expected(err: jsonschema.ValidationError) -> str:
     if v == "minLength":
         return "expected non-empty text"
     if v == "minProperties":
-        names = sorted(err.schema.get("properties", {}))
+        names = sorted(schema.get("properties", {}))
         if names:
             return f"expected at least {spec} key(s) out of: {', '.join(names)}"
         return f"expected at least {spec} key(s)"
@@ -539,7 +605,7 @@ def schema_diagnostics(
     An unknown key is reported at the key itself, with the keys that are allowed there.
     """
     validator = _validator(schema)
-    plain = _plain(tree)
+    plain = plain_data(tree)
     try:
         key: tuple[int, str] | None = (id(schema), json.dumps(plain, sort_keys=True, default=repr))
     except (TypeError, ValueError, RecursionError):
@@ -614,7 +680,7 @@ def variable_kinds(v: ir.Variable) -> frozenset[str]:
         return frozenset({"int"})
     if v.type == "real":
         return frozenset({"int", "real"})
-    found = set()
+    found: set[str] = set()
     for value in v.domain or ():
         found |= result_kinds(parse_expression(repr(value)), {})[0] if isinstance(value, (int, float, str)) else set()
     return frozenset(found) or KINDS
@@ -633,9 +699,8 @@ def assignment_problem(a: Assignment, var: ir.Variable, kinds: dict[str, frozens
             if any(c == d and type(c) is type(d) for d in var.domain) or (
                     var.type == "real" and isinstance(c, (int, float)) and not isinstance(c, bool) and c in var.domain):
                 continue
-            if var.type in ("int", "real") and var.domain and not isinstance(c, bool) and isinstance(c, (int, float)):
-                if c in var.domain:
-                    continue
+            if var.type in ("int", "real") and var.domain and not isinstance(c, bool) and isinstance(c, (int, float)) and c in var.domain:
+                continue
             return f"{a.text!r} can assign {c!r} to {var.name}, outside its domain {domain_text(var.domain)}"
     return None
 
@@ -662,7 +727,7 @@ def _parameter_result_problem(
         env = dict(zip(names, values))
         try:
             result = a.value(env)
-        except Exception as exc:  # noqa: BLE001 - every failure of third-party text is reported
+        except Exception as exc:
             shown = ", ".join(f"{k}={v!r}" for k, v in env.items())
             return f"{a.text!r} cannot be evaluated with {shown}: {exc}"
         if result not in var.domain or isinstance(result, bool) != isinstance(var.initial, bool):
@@ -675,7 +740,8 @@ def _parameter_result_problem(
 def domain_text(domain: Sequence[object]) -> str:
     """A domain as a reader wants it: ``[0, 2000]`` for a long run of integers, else the list."""
     values = list(domain)
-    if len(values) > 8 and all(type(v) is int for v in values) and values == list(range(values[0], values[-1] + 1)):  # type: ignore[call-overload]
+    ints = [v for v in values if type(v) is int]
+    if len(values) > 8 and len(ints) == len(values) and ints == list(range(ints[0], ints[-1] + 1)):
         return f"(the range {values[0]} to {values[-1]})"
     return repr(values)
 
@@ -1261,7 +1327,7 @@ def _joint_witness(
         try:
             if (a is None or a(env)) and (b is None or b(env)):
                 return env, True
-        except Exception:  # noqa: BLE001 - a guard failing on some value cannot prove disjointness
+        except Exception:
             return None, False
     return None, True
 

@@ -44,7 +44,7 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
@@ -290,16 +290,17 @@ class System:
 
     def restore(self, snap: tuple[object, ...]) -> None:
         """Make the system be in a state taken by :meth:`snapshot`."""
-        phase, axes, tags, queue, held = snap[:5]
+        phase, axes, tags, queue, held = cast(
+            "tuple[int, tuple[Any, ...], tuple[Any, ...], tuple[str, ...], tuple[tuple[str, str], ...]]", snap[:5])
         if self.ladder is not None:
             self.ladder.db.restore(snap[5])  # type: ignore[arg-type]
-        self.index = phase  # type: ignore[assignment]
-        for axis, a in zip(self.axes.values(), axes):  # type: ignore[call-overload]
+        self.index = phase
+        for axis, a in zip(self.axes.values(), axes):
             axis.restore(a)
-        for tag, t in zip(self.tags.values(), tags):  # type: ignore[call-overload]
+        for tag, t in zip(self.tags.values(), tags):
             tag.restore(t)
-        self.queue = list(queue)  # type: ignore[call-overload]
-        self.held_events = [EnvironmentEvent(a, e) for a, e in held]  # type: ignore[attr-defined]
+        self.queue = list(queue)
+        self.held_events = [EnvironmentEvent(a, e) for a, e in held]
 
     def _row(self, tag: TagInstance, condition: str) -> None:
         row = tag.instruction.table.row(condition)

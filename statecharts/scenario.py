@@ -24,7 +24,7 @@ from statecharts import expectations, ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.loader import _plain, bundled_spec_dir, read_document, schema_diagnostics, tree_diagnostics
+from statecharts.loader import bundled_spec_dir, plain_data, read_document, schema_diagnostics, tree_diagnostics
 from statecharts.scan import EnvironmentEvent, ScanInputs, ScanRecord, System
 
 SCENARIO_FORMAT = "motionchart-scenario/1"
@@ -195,11 +195,12 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
+        # an AoiScenario stands in for a Scenario (run_scenario hands it to the AOI runner)
         return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
-    doc = _plain(tree)
+    doc = plain_data(tree)
 
     def err(parts: tuple[Any, ...], message: str) -> None:
         line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
@@ -211,7 +212,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     charts: dict[str, ir.Chart] = {}
     untyped: set[str] = set()  # axes of an unknown type: their uses are not errors of their own
     for axis_name, a in setup["axes"].items():
-        p = ("setup", "axes", axis_name)
+        p: tuple[str | int, ...] = ("setup", "axes", axis_name)
         try:
             chart = spec.chart_for_axis_type(a["type"])
         except KeyError:
@@ -231,7 +232,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             except KeyError:
                 err((*p, "variables", vname), f"chart {chart.id} has no variable {vname!r}; variables: {', '.join(v.name for v in chart.variables)}")
                 continue
-            problem = _value_problem(var.type, var.domain, value)
+            problem = value_problem(var.type, var.domain, value)
             if problem:
                 err((*p, "variables", vname), f"{vname}: {problem}")
         if state in startable:
@@ -281,14 +282,15 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             operands[tag] = _operands(tag_ins[tag], ops, (*p, "operands", tag), err)
         events = []
         for j, e in enumerate(s.get("events", [])):
-            chart = charts.get(e["axis"])
-            if chart is None:
+            event_chart = charts.get(e["axis"])
+            if event_chart is None:
                 if e["axis"] not in untyped:
                     err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}; axes: {', '.join(setup['axes'])}")
                 continue
-            env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
+            env_events = [ev.name for ev in event_chart.events if ev.kind == "environment"]
             if e["event"] not in env_events:
-                err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
+                err((*p, "events", j, "event"),
+                    f"{e['event']!r} is not an environment event of {event_chart.id}; expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         for key in ("tags", "always"):
             if key in s:
@@ -388,7 +390,7 @@ def _expectation_problem(spec: ir.Spec, chart: ir.Chart | None, field: str, valu
         var = chart.variable(field)
     except KeyError:
         return None
-    return _value_problem(var.type, var.domain, value)
+    return value_problem(var.type, var.domain, value)
 
 
 def _integer_problem(logix_type: str, value: object) -> str | None:
@@ -424,7 +426,7 @@ def _load_ladder_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: i
     return load_program_scenario(path, tree, doc, spec, err, errors, base)
 
 
-def _value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
+def value_problem(vtype: str, domain: Sequence[object] | None, value: object) -> str | None:
     """Why ``value`` cannot be given to a variable of ``vtype``, or None."""
     if vtype == "bool":
         return None if isinstance(value, bool) else f"expected true or false, got {value!r}"
@@ -478,7 +480,8 @@ def build_system(scenario: Scenario, spec: ir.Spec) -> System:
     return system
 
 
-def _same(expected: object, actual: object) -> bool:
+def same_value(expected: object, actual: object) -> bool:
+    """Whether an observed value meets an expected one (a bool only equals a bool; numbers compare as numbers)."""
     if isinstance(expected, bool) or isinstance(actual, bool):
         return expected is actual or (isinstance(expected, bool) and isinstance(actual, bool) and expected == actual)
     if isinstance(expected, int) and isinstance(actual, int):
@@ -600,7 +603,7 @@ def _visit_recorders(system: System, scenario: Scenario) -> dict[str, list[str]]
     logs: dict[str, list[str]] = {}
     for axis in sorted(wanted):
         log: list[str] = []
-        system.axes[axis].machine.add_listener(_VisitRecorder(log))
+        system.axes[axis].machine.add_listener(_VisitRecorder(log))  # type: ignore[no-untyped-call]  # python-statemachine leaves it untyped
         logs[axis] = log
     return logs
 
@@ -657,7 +660,7 @@ def _sets(charts: Mapping[str, ir.Chart], untyped: set[str], axes: Mapping[str, 
                 what = "no variable" if var is None else "no writable attribute"
                 err((*parts, axis, vname), f"chart {chart.id} has {what} {vname!r}; a program may write: {', '.join(writable) or '(none)'}")
                 continue
-            problem = _value_problem(var.type, var.domain, value)
+            problem = value_problem(var.type, var.domain, value)
             if problem:
                 err((*parts, axis, vname), f"{vname}: {problem}")
                 continue
@@ -690,6 +693,7 @@ def _passes_through(chart: ir.Chart, value: object, parts: tuple[Any, ...], err:
 
 
 def scenario_files(paths: Sequence[Path | str]) -> list[Path]:
+    """The scenario files of ``paths``: files as given, folders searched for ``*.yaml``, ``*.yml`` and ``*.json``."""
     out: list[Path] = []
     for p in map(Path, paths):
         if p.is_dir():

@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import os
 import sys
+from collections.abc import Container, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, settings
@@ -27,11 +30,16 @@ try:
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from statecharts import ir
+from statecharts import engine, ir
+from statecharts.diagnostics import ScenarioError
+from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
+from statecharts.scenario import Scenario, ScenarioResult, load_scenario, run_scenario, scenario_files
+
+pytest_plugins = ["pytester"]
 
 DEFAULT_PROFILE = "ci"
-_NOT_TIMED = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow])
+_NOT_TIMED = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
 settings.register_profile("ci", max_examples=100, derandomize=True, print_blob=True, **_NOT_TIMED)
 settings.register_profile("dev", max_examples=50, **_NOT_TIMED)
 settings.register_profile("deep", max_examples=2000, **_NOT_TIMED)
@@ -42,7 +50,167 @@ def pytest_report_header(config: pytest.Config) -> str:
     return f"hypothesis profile: {settings.get_current_profile_name()}"
 
 
+def sampled(values: Iterable[Any], fast: Container[Any]) -> list[Any]:
+    """Parameters of a long exploration: those in ``fast`` run in ``make test`` (the fast
+    sample), the others only in ``make deep`` (marked ``deep``, deselected by default)."""
+    out = []
+    for v in values:
+        args = v if isinstance(v, tuple) else (v,)
+        out.append(pytest.param(*args, marks=() if v in fast else (pytest.mark.deep,)))
+    return out
+
+
 @pytest.fixture(scope="session")
-def spec() -> ir.Spec:
+def bundled_spec() -> ir.Spec:
     """The bundled specification, loaded once per test session."""
     return load_spec()
+
+
+@pytest.fixture(scope="session")
+def spec(bundled_spec: ir.Spec) -> ir.Spec:
+    """The bundled specification (a test module may override this name)."""
+    return bundled_spec
+
+
+# --------------------------------------------------------------------------- scenarios, run once
+
+SCENARIO_ROOT = Path(__file__).resolve().parents[1] / "scenarios"
+
+#: Charts whose transitions are recorded while the scenarios run (tests/test_cip_chart.py).
+RECORDED_CHARTS = ("AxisCIP",)
+
+
+@dataclass
+class ScenarioRuns:
+    """Every scenario file under ``scenarios/``, loaded and run once per test session.
+
+    ``outcome`` maps a file to its :class:`ScenarioResult`, or to the
+    :class:`ScenarioError` raised while loading or running it; ``taken`` names, per
+    recorded chart and transition id, the scenario files whose scans took it (not the
+    set-up of their axes).
+    """
+
+    files: list[Path]
+    outcome: dict[Path, ScenarioResult | ScenarioError] = field(default_factory=dict)
+    loaded: dict[Path, Scenario | ScenarioError] = field(default_factory=dict)
+    taken: dict[str, dict[str, set[Path]]] = field(default_factory=dict)
+
+    def result(self, path: Path) -> ScenarioResult:
+        """The result of ``path``; a file that did not load or run fails the calling test."""
+        got = self.outcome[path.resolve()]
+        if isinstance(got, ScenarioError):
+            pytest.fail(f"{path.name} does not load or run:\n{got}")
+        return got
+
+    def under(self, *dirs: Path) -> list[Path]:
+        roots = [d.resolve() for d in dirs]
+        return [p for p in self.files if any(p.is_relative_to(r) for r in roots)]
+
+
+class _TakenRecorder:
+    """A python-statemachine listener naming the chart transitions taken.
+
+    The engine declares each chart transition with its guard ``guard__<id>`` and its
+    actions ``action__<id>``; a transition with neither is known by its source, event
+    and target, which must be unique in its chart."""
+
+    def __init__(self, chart: str, keys: dict[tuple[object, ...], str], taken: dict[str, set[Path]]) -> None:
+        self.chart = chart
+        self.keys = keys
+        self.armed = False
+        self.taken = taken
+        self.current: Path | None = None
+
+    def on_transition(self, event: object, source: object, target: object, transition: Any) -> None:
+        if not self.armed or source is None or self.current is None or str(event) == "__initial__":
+            return
+        conds = [str(c) for c in transition.cond]
+        ons = [str(c) for c in transition.on]
+        guard = next((c[len("guard__"):] for c in conds if c.startswith("guard__")), None)
+        action = next((c[len("action__"):] for c in ons if c.startswith("action__")), None)
+        if guard is not None:
+            tid: str | None = guard
+        elif action is not None:
+            tid = action
+        else:
+            tid = self.keys.get((getattr(source, "id", None), str(event) if event else None,
+                                 getattr(target, "id", None) if target else None))
+        if tid is not None:
+            self.taken.setdefault(tid, set()).add(self.current)
+
+
+@pytest.fixture(scope="session")
+def scenario_runs(bundled_spec: ir.Spec) -> ScenarioRuns:
+    """Load and run every bundled scenario once for the whole test session, recording the
+    transitions of :data:`RECORDED_CHARTS` that each run takes during its scans."""
+    runs = ScenarioRuns(sorted(p.resolve() for p in scenario_files([SCENARIO_ROOT])))
+    recorders: dict[str, _TakenRecorder] = {}
+    for cid in RECORDED_CHARTS:
+        keys: dict[tuple[object, ...], str] = {}
+        for t in bundled_spec.chart(cid).transitions:
+            if t.guard is None and not t.actions:
+                key = (t.source, t.event, t.target)
+                assert key not in keys, f"{cid}: {t.id} and {keys[key]} cannot be told apart"
+                keys[key] = t.id
+        recorders[cid] = _TakenRecorder(cid, keys, runs.taken.setdefault(cid, {}))
+    original_class = engine.machine_class
+    original_init = AxisInstance.__init__
+
+    def machine_class(c: ir.Chart) -> Any:
+        machine, model = original_class(c)
+        recorder = recorders.get(c.id)
+        if recorder is None:
+            return machine, model
+        return (lambda *a, **kw: machine(*a, listeners=[recorder], **kw)), model
+
+    def init(self: AxisInstance, *a: Any, **kw: Any) -> None:
+        for r in recorders.values():
+            r.armed = False
+        original_init(self, *a, **kw)
+        for r in recorders.values():
+            r.armed = True
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(engine, "machine_class", machine_class)
+        mp.setattr(AxisInstance, "__init__", init)
+        for path in runs.files:
+            for r in recorders.values():
+                r.current = path
+            try:
+                scenario = load_scenario(path, bundled_spec)
+            except ScenarioError as exc:
+                runs.loaded[path] = runs.outcome[path] = exc
+                continue
+            runs.loaded[path] = scenario
+            try:
+                runs.outcome[path] = run_scenario(scenario, bundled_spec)
+            except ScenarioError as exc:
+                runs.outcome[path] = exc
+        for r in recorders.values():
+            r.current = None
+    return runs
+
+
+# --------------------------------------------------------------------------- generation, traced once
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _scenarios_traced_once_per_content() -> Iterator[None]:
+    """Generation (``generate``, ``docs``) runs every scenario to see what it exercises;
+    within the session, one spec and one set of scenario files (by content) are traced
+    once and the result reused."""
+    from statecharts.render import generate, traceability
+
+    original = traceability.trace
+    memo: dict[object, traceability.Traceability] = {}
+
+    def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> traceability.Traceability:
+        files = scenario_files([r for r in roots if Path(r).exists()])
+        key = (spec, tuple(str(r) for r in roots), tuple((str(f), f.read_bytes()) for f in files))
+        if key not in memo:
+            memo[key] = original(spec, roots)
+        return memo[key]
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(generate, "trace", trace)
+        yield

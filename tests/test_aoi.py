@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from conftest import ScenarioRuns
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -412,10 +413,11 @@ def test_huge_speed_completes_the_move_without_overflow() -> None:
     assert world.axes["P1"].position == 120.0
 
 
-def test_aoi_scenarios_run() -> None:
-    spec = load_spec()
-    for p in sorted((PROJECT / "scenarios" / "aoi").glob("*.yaml")):
-        result = run_scenario(load_scenario(p, spec), spec)
+def test_aoi_scenarios_run(scenario_runs: ScenarioRuns) -> None:
+    paths = sorted((PROJECT / "scenarios" / "aoi").glob("*.yaml"))
+    assert paths
+    for p in paths:
+        result = scenario_runs.result(p)  # run once per session (conftest)
         assert result.passed, f"{p.name}: " + "; ".join(map(str, result.mismatches))
 
 

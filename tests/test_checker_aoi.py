@@ -36,8 +36,8 @@ def _check(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, st
 
 @pytest.fixture(scope="module")
 def bundled_report() -> dict[str, object]:
-    import io
     import argparse
+    import io
 
     from checker import aoi_check
 
@@ -149,7 +149,7 @@ properties:
 def test_malformed_aoi_system_is_located(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     f = tmp_path / "broken.yaml"
     f.write_text(BAD_SYSTEM, encoding="utf-8")
-    code, out, err = _check(["--system", str(f)], capsys)
+    code, _out, err = _check(["--system", str(f)], capsys)
     assert code == 1
     assert "Traceback" not in err
     lines = err.splitlines()

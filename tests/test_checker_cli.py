@@ -142,7 +142,7 @@ def test_axes_scales_the_system(tmp_path: Path, capsys: pytest.CaptureFixture[st
     n = one["states"]
     # interchangeable axes: unordered pairs of one-axis states (times the shared clock phase, here 1)
     assert two["states"] <= n * (n + 1) // 2
-    code3, out3, _ = _run(["--system", str(system), "--axes", "2", "--no-symmetry", "--json"], capsys)
+    _code3, out3, _ = _run(["--system", str(system), "--axes", "2", "--no-symmetry", "--json"], capsys)
     assert json.loads(out3)["states"] > two["states"]
 
 

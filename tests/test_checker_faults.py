@@ -17,7 +17,6 @@ import dataclasses
 from collections import deque
 from pathlib import Path
 
-
 from checker import mutate
 from checker.model import Model
 from checker.properties import Property, load_properties
@@ -84,7 +83,7 @@ def _check_mutant(spec: ir.Spec, mutant: ir.Spec, prop_name: str, tmp_path: Path
 
 def test_swapped_target_is_found(spec: ir.Spec, tmp_path: Path) -> None:
     # MSO's request now lands in Direct Drive Control: the MSO never completes
-    mutant, m = mutate.swap_target(spec, "AxisNonCIP", "mso", "DirectDriveControl")
+    mutant, _m = mutate.swap_target(spec, "AxisNonCIP", "mso", "DirectDriveControl")
     prop, scans = _check_mutant(spec, mutant, "mso_held_rung_ends_in_dn_or_er", tmp_path)
     assert prop.kind == "response"
     assert scans == 2  # rung up (no DN, no ER), one more scan held: the bound of two is exceeded
@@ -92,20 +91,20 @@ def test_swapped_target_is_found(spec: ir.Spec, tmp_path: Path) -> None:
 
 def test_dropped_guard_is_found(spec: ir.Spec, tmp_path: Path) -> None:
     # the enable delay counts below zero once the output is applied
-    mutant, m = mutate.drop_guard(spec, "AxisNonCIP", "enable_delay")
+    mutant, _m = mutate.drop_guard(spec, "AxisNonCIP", "enable_delay")
     _check_mutant(spec, mutant, "output_applied_only_after_the_enable_delay", tmp_path)
 
 
 def test_changed_error_code_is_found(spec: ir.Spec, tmp_path: Path) -> None:
     # MSO on a faulted axis now reports ER with ERR 0
-    mutant, m = mutate.set_error_code(spec, "MSO", "faulted", 0)
+    mutant, _m = mutate.set_error_code(spec, "MSO", "faulted", 0)
     _prop, scans = _check_mutant(spec, mutant, "er_implies_err_and_not_dn", tmp_path)
     assert scans == 2  # a servo fault (Disable Drive: Axis Faulted), then MSO
 
 
 def test_changed_extended_error_is_found_by_error_code_coverage(spec: ir.Spec) -> None:
     # the abort of MDO reports 12/9: the catalogued 12/1 is never produced
-    mutant, m = mutate.set_error_code(spec, "MDO", "left_direct_drive", 12, 9)
+    mutant, _m = mutate.set_error_code(spec, "MDO", "left_direct_drive", 12, 9)
     props = [p for p in load_properties(mutant) if p.kind == "cover" and p.cover == "error_codes"]
     sd = _small_system(mutant)
     result = explore(Model(mutant, sd, props), progress=False)

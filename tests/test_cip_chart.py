@@ -24,17 +24,20 @@ import sys
 from pathlib import Path
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 try:
     import statecharts  # noqa: F401
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from statecharts import engine, ir
+from conftest import ScenarioRuns
+
+from statecharts import ir
 from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
-from statecharts.scenario import load_scenario, run_scenario, scenario_files
+from statecharts.scenario import load_scenario
 
 CIP_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "cip"
 MRHD_DIR = Path(__file__).resolve().parents[1] / "scenarios" / "mrhd"
@@ -223,70 +226,22 @@ def test_every_chart_transition_is_covered(spec: ir.Spec) -> None:
     assert not missing, f"AxisCIP transitions no scenario declares: {missing}"
 
 
-class _TakenRecorder:
-    """A python-statemachine listener naming the AxisCIP transitions taken.
-
-    The engine declares each chart transition with its guard ``guard__<id>`` and its
-    actions ``action__<id>``; a transition with neither is known by its source, event
-    and target, which the fixture checks are unique."""
-
-    def __init__(self, keys: dict[tuple[object, ...], str]) -> None:
-        self.keys = keys
-        self.armed = False
-        self.taken: dict[str, set[str]] = {}
-        self.current = ""
-
-    def on_transition(self, event: object, source: object, target: object, transition: object) -> None:
-        if not self.armed or source is None or str(event) == "__initial__":
-            return
-        conds = [str(c) for c in transition.cond]  # type: ignore[attr-defined]
-        ons = [str(c) for c in transition.on]  # type: ignore[attr-defined]
-        guard = next((c[len("guard__"):] for c in conds if c.startswith("guard__")), None)
-        action = next((c[len("action__"):] for c in ons if c.startswith("action__")), None)
-        if guard is not None:
-            tid = guard
-        elif action is not None:
-            tid = action
-        else:
-            tid = self.keys.get((source.id, str(event) if event else None, target.id if target else None))  # type: ignore[attr-defined]
-        if tid is not None:
-            self.taken.setdefault(tid, set()).add(self.current)
-
-
 @pytest.fixture(scope="module")
-def taken(spec: ir.Spec) -> dict[str, set[str]]:
-    """Run every scenario of scenarios/cip and scenarios/mrhd; the AxisCIP transitions each
-    run takes during its scans (not while its axes are set up)."""
-    chart = spec.chart("AxisCIP")
-    keys: dict[tuple[object, ...], str] = {}
-    for t in chart.transitions:
-        if t.guard is None and not t.actions:
-            key = (t.source, t.event, t.target)
-            assert key not in keys, f"{t.id} and {keys[key]} cannot be told apart"
-            keys[key] = t.id
-    recorder = _TakenRecorder(keys)
-    original_class = engine.machine_class
-    original_init = AxisInstance.__init__
-
-    def machine_class(c: ir.Chart):  # type: ignore[no-untyped-def]
-        machine, model = original_class(c)
-        if c.id != "AxisCIP":
-            return machine, model
-        return (lambda *a, **kw: machine(*a, listeners=[recorder], **kw)), model
-
-    def init(self: AxisInstance, *a: object, **kw: object) -> None:
-        recorder.armed = False
-        original_init(self, *a, **kw)  # type: ignore[arg-type]
-        recorder.armed = True
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(engine, "machine_class", machine_class)
-        mp.setattr(AxisInstance, "__init__", init)
-        for path in scenario_files([CIP_DIR, MRHD_DIR]):
-            recorder.current = path.name
-            result = run_scenario(load_scenario(path, spec), spec)
-            assert result.passed, f"{path.name}: " + "; ".join(str(m) for m in result.mismatches)
-    return recorder.taken
+def taken(scenario_runs: ScenarioRuns) -> dict[str, set[str]]:
+    """The AxisCIP transitions the scenarios of scenarios/cip and scenarios/mrhd take
+    during their scans (not while their axes are set up), recorded while the session ran
+    every scenario once (conftest); each of those scenarios passes."""
+    files = set(scenario_runs.under(CIP_DIR, MRHD_DIR))
+    assert files, "no scenarios under scenarios/cip and scenarios/mrhd"
+    for path in sorted(files):
+        result = scenario_runs.result(path)
+        assert result.passed, f"{path.name}: " + "; ".join(str(m) for m in result.mismatches)
+    out: dict[str, set[str]] = {}
+    for tid, paths in scenario_runs.taken["AxisCIP"].items():
+        names = {p.name for p in paths if p in files}
+        if names:
+            out[tid] = names
+    return out
 
 
 def test_every_chart_transition_is_taken_by_a_scenario(spec: ir.Spec, taken: dict[str, set[str]]) -> None:
@@ -311,8 +266,8 @@ def test_documented_transition_is_in_the_chart_and_taken(
 
 
 @pytest.mark.parametrize("path", sorted(CIP_DIR.glob("*.yaml")), ids=lambda p: p.stem)
-def test_cip_scenario_passes(path: Path, spec: ir.Spec) -> None:
-    result = run_scenario(load_scenario(path, spec), spec)
+def test_cip_scenario_passes(path: Path, scenario_runs: ScenarioRuns) -> None:
+    result = scenario_runs.result(path)  # run once per session (conftest)
     assert result.passed, "\n".join(str(m) for m in result.mismatches)
 
 
@@ -322,7 +277,7 @@ _FAULTS = ("axis_fault", "module_fault", "group_fault", "configuration_fault")
 @given(
     unrecoverable=st.sampled_from(["none", "initialization", "connection"]),
     shutdown=st.booleans(), bus_up=st.booleans(), start_inhibit=st.booleans(),
-    faults=st.lists(st.sampled_from(_FAULTS + ("safety_fault", "motion_fault")), max_size=4),
+    faults=st.lists(st.sampled_from((*_FAULTS, "safety_fault", "motion_fault")), max_size=4),
 )
 def test_fault_reset_precedence_from_faulted(
     spec: ir.Spec, unrecoverable: str, shutdown: bool, bus_up: bool, start_inhibit: bool, faults: list[str]

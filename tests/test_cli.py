@@ -13,6 +13,7 @@ diagnostic is found by a marker unique to the change.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -343,7 +344,7 @@ def test_bad_scenario(capsys: pytest.CaptureFixture[str], tmp_path: Path, case: 
     [d] = info.value.diagnostics
     assert (d.file, d.line) == (str(path), line_of(path, marker)), str(d)
     assert message in d.message, str(d)
-    rc, out, err = run(capsys, "simulate", str(path))
+    rc, _out, err = run(capsys, "simulate", str(path))
     assert rc == 1
     assert err.splitlines()[0] == str(d)
     assert "Traceback" not in err
@@ -504,10 +505,8 @@ def test_fuzz_damaged_scenario_raises_only_scenario_error(tmp_path: Path, text: 
     if suffix == ".json":
         from ruamel.yaml import YAML
 
-        try:
+        with contextlib.suppress(Exception):
             text = json.dumps(YAML(typ="safe").load(text), default=str)
-        except Exception:  # noqa: BLE001 - not YAML: feed the damaged text itself as JSON
-            pass
     path.write_text(text, encoding="utf-8", errors="surrogatepass")
     try:
         result = run_scenario(load_scenario(path, SPEC), SPEC)

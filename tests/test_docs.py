@@ -192,11 +192,9 @@ def test_console_example_prints_what_the_docs_show(
 ) -> None:
     monkeypatch.chdir(workspace(tmp_path))
     buffer = io.StringIO()
-    with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(buffer):
-        try:
-            main(list(command.argv))
-        except SystemExit:  # --help, --version and usage errors exit through argparse
-            pass
+    # --help, --version and usage errors exit through argparse
+    with contextlib.redirect_stdout(buffer), contextlib.redirect_stderr(buffer), contextlib.suppress(SystemExit):
+        main(list(command.argv))
     got, want = normalise(buffer.getvalue()), normalise(command.expected)
     checker = doctest.OutputChecker()
     if not checker.check_output(want, got, doctest.ELLIPSIS):
@@ -230,9 +228,7 @@ def test_relative_links_resolve(doc: Path) -> None:
             continue
         file_part, _, anchor = target.partition("#")
         dest = (doc.parent / file_part).resolve() if file_part else doc
-        if not dest.exists():
-            broken.append(target)
-        elif anchor and dest.suffix == ".md" and anchor not in heading_anchors(dest):
+        if not dest.exists() or (anchor and dest.suffix == ".md" and anchor not in heading_anchors(dest)):
             broken.append(target)
     assert not broken, f"{doc.name}: broken links {broken}"
 

@@ -28,7 +28,8 @@ from collections.abc import Iterator, Mapping
 from typing import Any
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
@@ -280,7 +281,7 @@ def cip_setups(draw: Any) -> dict[str, Any]:
     }
 
 
-@pytest.mark.parametrize("mnemonic", NONCIP_INSTRUCTIONS + ("MDS",))
+@pytest.mark.parametrize("mnemonic", (*NONCIP_INSTRUCTIONS, "MDS"))
 @given(s=noncip_setups)
 def test_noncip_codes_if_and_only_if(mnemonic: str, s: dict[str, Any]) -> None:
     assert noncip_run(mnemonic, s) == noncip_expected(mnemonic, s), s

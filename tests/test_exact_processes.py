@@ -21,7 +21,8 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from hypothesis import given, strategies as st
+from hypothesis import given
+from hypothesis import strategies as st
 
 from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec
@@ -49,7 +50,7 @@ def _drive(system: System, tag: str, disturbance: str, at: int, then: int, event
     """Raise ``tag``'s rung at scan 0, apply ``disturbance`` (an event of the axis, or the
     tag of another instruction whose rung goes true) at scan ``at``; the outcome of
     ``tag`` after ``then`` more scans."""
-    rungs = {t: False for t in system.tags}
+    rungs = dict.fromkeys(system.tags, False)
     rungs[tag] = True
     obs: Any = None
     before: object = IN_PROCESS  # an instruction that ended before the disturbance keeps its end
@@ -110,7 +111,7 @@ def servo_mrhd_expected(test: int, disturbance: str) -> object:
     return IN_PROCESS
 
 
-@given(test=st.sampled_from([0, 1, 2]), disturbance=st.sampled_from(sorted(SERVO_EVENTS) + ["msf", "mdf", "masd", "none"]),
+@given(test=st.sampled_from([0, 1, 2]), disturbance=st.sampled_from([*sorted(SERVO_EVENTS), "msf", "mdf", "masd", "none"]),
        at=st.integers(1, 12))
 def test_servo_mrhd_ends_12_1_or_15_iff_documented(test: int, disturbance: str, at: int) -> None:
     # 100 ms coarse updates: the 2 s time-out of the motor/encoder test is 20 updates
@@ -154,7 +155,7 @@ def cip_mrhd_expected(test: int, disturbance: str) -> object:
 
 
 @given(test=st.sampled_from([0, 1, 2, 3]), feedback_only=st.booleans(),
-       disturbance=st.sampled_from(sorted(CIP_EVENTS) + ["msf", "masd", "none"]), at=st.integers(2, 10))
+       disturbance=st.sampled_from([*sorted(CIP_EVENTS), "msf", "masd", "none"]), at=st.integers(2, 10))
 def test_cip_mrhd_ends_12_1_or_15_iff_documented(test: int, feedback_only: bool, disturbance: str, at: int) -> None:
     if feedback_only and test in (0, 3):
         test = 1  # 000: only the encoder and marker tests run on a feedback-only axis

@@ -26,7 +26,7 @@ from checker.cli import main
 from statecharts.diagnostics import ScenarioError, SpecError
 from statecharts.engine import MAX_MICROSTEPS, EventlessLoopError
 from statecharts.expr import MAX_SIZE, EvalError, ExprError, parse_assignment, parse_expression
-from statecharts.loader import _plain, bundled_spec_dir, load_spec_documents, read_yaml, spec_files
+from statecharts.loader import bundled_spec_dir, load_spec_documents, plain_data, read_yaml, spec_files
 from statecharts.scenario import load_scenario, load_scenario_document, run_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,7 +38,7 @@ def _bundled_documents() -> dict[str, Any]:
     for p in spec_files():
         if p.suffix == ".json" or p.parent.name in ("schema", "systems", "properties"):
             continue
-        docs[str(p)] = _plain(read_yaml(p, []))
+        docs[str(p)] = plain_data(read_yaml(p, []))
     return docs
 
 
@@ -438,10 +438,9 @@ def test_an_atomic_write_leaves_no_temporary_file_when_interrupted(tmp_path: Pat
     from statecharts.outputs import atomic_path, atomic_write_text
     target = tmp_path / "out.txt"
     atomic_write_text(target, "old")
-    with pytest.raises(KeyboardInterrupt):
-        with atomic_path(target) as tmp:
-            tmp.write_text("half")
-            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt), atomic_path(target) as tmp:
+        tmp.write_text("half")
+        raise KeyboardInterrupt
     assert target.read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out.txt"]
 

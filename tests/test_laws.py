@@ -56,6 +56,7 @@ exception.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import struct
 from collections.abc import Mapping
@@ -72,7 +73,8 @@ from hypothesis.stateful import (
     rule,
     run_state_machine_as_test,
 )
-from strategies import (
+
+from motionchart.strategies import (
     AxisSetup,
     axis_setups,
     environment_event_names,
@@ -84,7 +86,6 @@ from strategies import (
     tag_name,
     value_operands,
 )
-
 from statecharts import ir
 from statecharts.loader import load_spec
 from statecharts.scan import EnvironmentEvent, ScanInputs, System, TagInstance
@@ -122,10 +123,8 @@ def flags_dint(tag: Mapping[str, object]) -> int:
 
 def _note(label: str) -> None:
     """Count how often a conditional law was exercised (``--hypothesis-show-statistics``)."""
-    try:
+    with contextlib.suppress(InvalidArgument):  # a replay outside hypothesis
         record_event(label)
-    except InvalidArgument:  # a replay outside hypothesis
-        pass
 
 
 def _result(tag: Mapping[str, object]) -> tuple[object, ...]:
@@ -182,7 +181,7 @@ def make_law_machine(
             self.axis_of = {t: ax for t, _, ax in prog}
             self.system = system_cls(spec, axes, prog, scan_ms=scan_ms, coarse_update_ms=coarse_ms)
             self.obs: Mapping[str, Mapping[str, object]] = self.system.observe()
-            self.rung_state = {t: False for t in tags}
+            self.rung_state = dict.fromkeys(tags, False)
             self.outstanding: set[str] = set()  # executed, neither DN nor ER seen since
             self.stale_err: set[str] = set()  # had ER when a prescan cleared it
             self.held_events = 0  # environment events not yet applied by a coarse update
@@ -420,30 +419,30 @@ def test_err_law_allows_the_code_a_prescan_leaves() -> None:
 HANG_REGRESSIONS = {
     # two requests for one axis in one coarse update: MASD's completion (ShutdownStatus)
     # was judged after MASR had already left Shutdown, so MASD never set DN or ER
-    "masd_and_masr_in_one_update": dict(
-        steps=[("rungs", {"pattern": {"MASD_Ctrl": True, "MASR_Ctrl": True}, "operands": {}})]
+    "masd_and_masr_in_one_update": {
+        "steps": [("rungs", {"pattern": {"MASD_Ctrl": True, "MASR_Ctrl": True}, "operands": {}})]
         + [("plain_scan", {})] * 4,
-        timing=(500, 500),
-    ),
+        "timing": (500, 500),
+    },
     # MASR on an axis whose fault condition persists with FaultAction Shutdown: the fault
     # latches again in the same update and ShutdownStatus stays set
-    "masr_with_persisting_fault": dict(
-        steps=[("environment", {"axis": "Axis1", "event": "servo_fault"}), ("rung_MASR_Ctrl", {"rung": True})]
+    "masr_with_persisting_fault": {
+        "steps": [("environment", {"axis": "Axis1", "event": "servo_fault"}), ("rung_MASR_Ctrl", {"rung": True})]
         + [("plain_scan", {})] * 4,
-        variables=(("AxisConfiguration", "Servo"), ("Configured", True), ("FaultAction", "Shutdown")),
-        timing=(500, 500),
-    ),
+        "variables": (("AxisConfiguration", "Servo"), ("Configured", True), ("FaultAction", "Shutdown")),
+        "timing": (500, 500),
+    },
     # a fault in the update that answers MSO: the axis is Axis Faulted and MSO's
     # completion (servo and drive on) can no longer hold
-    "mso_overtaken_by_fault": dict(
-        steps=[
+    "mso_overtaken_by_fault": {
+        "steps": [
             ("plain_scan", {}),  # scan 0 has a coarse update; scan 1 has none
             ("rung_MSO_Ctrl", {"rung": True}),  # queued
             ("environment", {"axis": "Axis1", "event": "servo_fault"}),  # answered, then the fault
         ]
         + [("plain_scan", {})] * 8,
-        timing=(250, 500),
-    ),
+        "timing": (250, 500),
+    },
 }
 
 

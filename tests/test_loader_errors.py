@@ -388,11 +388,11 @@ def _overlap_pair(guard_a: str | None, guard_b: str | None, priority_b: int | No
     """Add a copy of a plain event transition; optionally guard both and prioritise the copy."""
     def change(t: Any) -> None:
         c = chart_of(t)
-        i, tr = event_transition(c)
+        _i, tr = event_transition(c)
         b = bool_variable(c)
         if guard_a is not None:
             tr["guard"] = guard_a.format(b=b)
-        extra = dict(id="zz_overlap", from_=tr["from"], event=tr["event"], to=tr["to"], source="test")
+        extra = {"id": "zz_overlap", "from_": tr["from"], "event": tr["event"], "to": tr["to"], "source": "test"}
         if guard_b is not None:
             extra["guard"] = guard_b.format(b=b)
         if priority_b is not None:
@@ -770,7 +770,7 @@ def _tree_mutation(draw: st.DrawFn, rel: str) -> bytes:
     buf = io.StringIO()
     try:
         _RT.dump(tree, buf)
-    except Exception:  # noqa: BLE001 - ruamel cannot always write what it was given; damage the text instead
+    except Exception:
         return _TEXTS[rel].encode("utf-8")[: len(_TEXTS[rel]) // 2]
     return buf.getvalue().encode("utf-8", "surrogatepass")
 

@@ -33,7 +33,7 @@ def test_hypothesis_finds_the_start_that_hangs_the_recovery() -> None:
     # the routine cannot leave state 9 when an axis starts in Shutdown (its MSF errs with 12/12,
     # so its MAFR never runs); hypothesis shrinks the failing start to one Shutdown axis
     hang = find(axis_starts(AXES), lambda s: not recovers(s),
-                settings=settings(database=None, derandomize=True, deadline=None))
+                settings=settings(database=None, derandomize=True))
     assert sorted(s["state"] for s in hang.values()) == ["Running", "Running", "Shutdown"]
 
 

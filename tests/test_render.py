@@ -22,6 +22,7 @@ import argparse
 import contextlib
 import doctest
 import io
+import itertools
 import os
 import re
 from pathlib import Path
@@ -33,8 +34,7 @@ import statecharts.render
 from checker import cli, render_cli
 from statecharts import ir
 from statecharts.loader import bundled_spec_dir, load_spec
-from statecharts.render import UnknownTarget, resolve
-from statecharts.render import graphviz_bin
+from statecharts.render import UnknownTarget, graphviz_bin, resolve
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import build_flowchart, instruction_dot
 from statecharts.render.generate import build, svg_stamp
@@ -186,7 +186,7 @@ def test_flowchart_checks_in_documented_order_each_to_its_err_box(spec: ir.Spec)
     decisions = [n.id for n in fc.nodes if n.id.startswith("check_")]
     assert decisions == [f"check_{c.id}" for c in ins.checks]
     chain = [e for e in fc.edges if e.source.startswith("check_") and e.target.startswith("check_")]
-    assert [(e.source, e.target) for e in chain] == list(zip(decisions, decisions[1:]))
+    assert [(e.source, e.target) for e in chain] == list(itertools.pairwise(decisions))
     assert all(e.label == "no" for e in chain)
     boxes = {n.id: n for n in fc.nodes}
     for c in ins.checks:
@@ -356,7 +356,7 @@ def test_generate_into_a_file_is_an_error(tmp_path: Path) -> None:
 
 
 def test_docs_writes_the_reference(tmp_path: Path) -> None:
-    code, msg, err = run(["docs", "-o", str(tmp_path / "ref"), "--scenarios", str(ROOT / "scenarios")])
+    code, _msg, err = run(["docs", "-o", str(tmp_path / "ref"), "--scenarios", str(ROOT / "scenarios")])
     assert code == 0, err
     ref = tmp_path / "ref"
     mso = (ref / "instructions" / "MSO.md").read_text()
@@ -400,6 +400,7 @@ setup:
     - {tag: mso1, instruction: MSO, axis: Axis1}
 steps:
   - rungs: {mso1: true}
+    expect: {mso1: {ER: true, ERR: 12, EXERR: 12}}
 """
 
 

@@ -49,7 +49,7 @@ CHECK_ORDER = [1000, 1001, 1005, 1006, 1007, 1008, 1010, 1011, 1012, 1013, 1014,
 #: The checks that only apply to a physical-to-path recovery (docs/aoi.md: "SyncType 1").
 SYNC1_ONLY = {1012, 1013, 1014, 1015, 1016, 1017}
 #: 003 §2.4: every code the instruction reports (the ordered checks' and the four call errors).
-ALL_CODES = sorted(CHECK_ORDER + [1020, 1022, 1023, 1027])
+ALL_CODES = sorted([*CHECK_ORDER, 1020, 1022, 1023, 1027])
 #: docs/aoi.md "The recovery chart": the state calling each instruction and its code.
 CALL_CODES = {"MAH": 1020, "MAM": 1022, "MAG": 1023, "MRP": 1027}
 #: docs/aoi.md: each sub-instruction's preconditions in order, as .ERR codes.
@@ -127,7 +127,7 @@ def test_every_error_code_appears_in_the_page(doc: AoiDocument, page: str) -> No
     for code in ALL_CODES:
         assert str(code) in page
     # the four call errors are reported by the state calling the instruction
-    by_code = {c: r for c, r in zip(listed, rows)}
+    by_code = dict(zip(listed, rows))
     for mnemonic, code in CALL_CODES.items():
         assert f"({mnemonic} fails)" in by_code[code][2]
 
@@ -264,7 +264,7 @@ def test_build_writes_the_aoi_artefacts(tmp_path: Path, doc: AoiDocument) -> Non
 
 def test_docs_command_writes_the_aoi_page(tmp_path: Path) -> None:
     out = tmp_path / "ref"
-    code, msg, err = run(["docs", "-o", str(out), "--scenarios", str(ROOT / "scenarios")])
+    code, _msg, err = run(["docs", "-o", str(out), "--scenarios", str(ROOT / "scenarios")])
     assert code == 0, err
     page = (out / "aoi" / f"{AOI_ID}.md").read_text(encoding="utf-8")
     assert "## Checks, in the order they run" in page and "## Recovery chart" in page

@@ -22,10 +22,10 @@ try:
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from statecharts import ir
-from statecharts.loader import load_spec
+from conftest import ScenarioRuns
+
 from statecharts.diagnostics import ScenarioError
-from statecharts.scenario import Scenario, load_scenario, run_scenario
+from statecharts.scenario import Scenario
 
 SCENARIO_DIR = Path(__file__).resolve().parents[1] / "scenarios"
 SCENARIO_FILES = sorted(
@@ -108,20 +108,9 @@ REQUIRED_COVERS = (
 
 
 @pytest.fixture(scope="module")
-def scenario_spec() -> ir.Spec:
-    return load_spec()
-
-
-@pytest.fixture(scope="module")
-def loaded(scenario_spec: ir.Spec) -> dict[str, Scenario | ScenarioError]:
-    """Every scenario file, loaded once; a file that does not load keeps its error."""
-    out: dict[str, Scenario | ScenarioError] = {}
-    for p in SCENARIO_FILES:
-        try:
-            out[p.stem] = load_scenario(p, scenario_spec)
-        except ScenarioError as exc:
-            out[p.stem] = exc
-    return out
+def loaded(scenario_runs: ScenarioRuns) -> dict[str, Scenario | ScenarioError]:
+    """Every scenario file, loaded once per session (conftest); a file that does not load keeps its error."""
+    return {p.stem: scenario_runs.loaded[p.resolve()] for p in SCENARIO_FILES}
 
 
 @pytest.fixture(scope="module")
@@ -147,11 +136,11 @@ def test_scenario_files_found() -> None:
 
 
 @pytest.mark.parametrize("path", _params())
-def test_scenario(path: Path, loaded: dict[str, Scenario | ScenarioError], scenario_spec: ir.Spec) -> None:
+def test_scenario(path: Path, loaded: dict[str, Scenario | ScenarioError], scenario_runs: ScenarioRuns) -> None:
     scenario = loaded[path.stem]
     if isinstance(scenario, ScenarioError):
         pytest.fail(f"{path.name} does not load:\n{scenario}")
-    result = run_scenario(scenario, scenario_spec)
+    result = scenario_runs.result(path)  # run once per session (conftest)
     assert result.passed, f"{path.name}:\n" + "\n".join(str(m) for m in result.mismatches)
 
 

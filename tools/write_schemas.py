@@ -7,7 +7,8 @@ from pathlib import Path
 ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
 EXPR = {"type": "string", "minLength": 1}
 ACTIONS = {"type": "array", "items": EXPR}
-SOURCE = {"type": "string", "minLength": 1, "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
+SOURCE = {"type": "string", "minLength": 1,
+          "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
 INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$", "description": "Id of an interpretation in interpretations.yaml."}
 CONF = {"enum": ["C", "C3", "I", "U"]}
 SCALAR = {"type": ["boolean", "integer", "number", "string"]}
@@ -36,7 +37,8 @@ state = {
         "entry": ACTIONS, "exit": ACTIONS,
         "states": {"type": "array", "items": {"$ref": "#/$defs/state"}},
         "implies": {"type": "object", "additionalProperties": SCALAR,
-                    "description": "Values of chart variables that an axis set up in this state (or a descendant) has, e.g. a connected drive with its DC bus up."},
+                    "description": ("Values of chart variables that an axis set up in this state (or a descendant) has, "
+                                    "e.g. a connected drive with its DC bus up.")},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -289,7 +291,8 @@ scenario = {
                 "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
                 "within": {"type": "integer", "minimum": 1, "maximum": 100000,
                            "description": "The step lasts until its expectations hold, at most this many scans."},
-                "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                "set": {"type": "object",
+                        "additionalProperties": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                         "description": "Attribute writes before the step's first scan, as SSV does: {axis: {attribute: value}}."},
                 "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
                 "operands": {"type": "object", "additionalProperties": {
@@ -389,7 +392,8 @@ SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
 # the add-on instruction's own languages (docs/aoi.md); defined beside their loader
-from statecharts.aoi import AOI_SCHEMA, SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import AOI_SCHEMA, SUB_SCHEMA  # noqa: E402
+from statecharts.aoi import SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA  # noqa: E402
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})

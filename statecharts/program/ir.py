@@ -13,7 +13,6 @@ L5X export gives equal IR.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Union
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,7 +66,7 @@ class IndirectBit:
     bit: Expression
 
 
-Selector = Union[Member, Index, IndirectBit]
+Selector = Member | Index | IndirectBit
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,7 +111,7 @@ class Binary:
     right: Expression
 
 
-Expression = Union[Number, Reference, Unary, Binary]
+Expression = Number | Reference | Unary | Binary
 
 
 def expression_text(e: Expression) -> str:
@@ -149,7 +148,7 @@ class Name:
     text: str
 
 
-Operand = Union[Reference, Number, Placeholder, Name, Unary, Binary]
+Operand = Reference | Number | Placeholder | Name | Unary | Binary
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,7 +170,7 @@ class Branch:
     location: SourceLocation = field(default=NOWHERE, compare=False)
 
 
-Element = Union[Instruction, Branch]
+Element = Instruction | Branch
 
 
 @dataclass(frozen=True, slots=True)
@@ -211,7 +210,7 @@ AXIS_TYPES = ("AXIS_CIP_DRIVE", "AXIS_SERVO", "AXIS_SERVO_DRIVE", "AXIS_VIRTUAL"
 #: the data type of an axis tag of a rung file, whose type the scenario (or binding) gives
 AXIS_UNTYPED = "AXIS"
 
-Scalar = Union[bool, int, float]
+Scalar = bool | int | float
 
 
 @dataclass(frozen=True, slots=True)

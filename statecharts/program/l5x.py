@@ -19,6 +19,7 @@ problem points at its line.  What is read:
 from __future__ import annotations
 
 import dataclasses
+import functools
 import xml.etree.ElementTree as ET
 from typing import Any
 
@@ -27,12 +28,29 @@ from defusedxml.ElementTree import DefusedXMLParser
 
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic
-from statecharts.program.ir import (ATOMIC_TYPES, AXIS_TYPES, STRUCTURE_TYPES, Binary, Branch, Element, Index,
-                                    IndirectBit, Instruction, Operand, Program, Reference, Routine, Rung, Scalar,
-                                    SourceLocation, Tag, Unary)
+from statecharts.program.ir import (
+    ATOMIC_TYPES,
+    AXIS_TYPES,
+    STRUCTURE_TYPES,
+    Binary,
+    Branch,
+    Element,
+    Index,
+    IndirectBit,
+    Instruction,
+    Operand,
+    Program,
+    Reference,
+    Routine,
+    Rung,
+    Scalar,
+    SourceLocation,
+    Tag,
+    Unary,
+)
 from statecharts.program.logix_expr import ExpressionSyntaxError, number_value, parse_reference
-from statecharts.program.reader import ProgramError, _capped, check_declared, check_routines
-from statecharts.program.rungtext import RungParser, parse_neutral_rung
+from statecharts.program.reader import ProgramError, capped, check_declared, check_routines
+from statecharts.program.rungtext import RungParser, parse_neutral_rung, shifted_locator
 
 ROUTINE_KINDS = {"ST": "Structured Text (ST)", "FBD": "Function Block Diagram (FBD)",
                  "SFC": "Sequential Function Chart (SFC)"}
@@ -47,7 +65,7 @@ class _Builder(ET.TreeBuilder):
         self.positions: dict[int, tuple[int, int]] = {}
         self.keep: list[ET.Element] = []
 
-    def start(self, tag: str, attrs: dict[str, str]) -> ET.Element:  # type: ignore[override]
+    def start(self, tag: str, attrs: dict[str, str]) -> ET.Element:
         element = super().start(tag, attrs)
         expat = self.parser.parser
         self.positions[id(element)] = (expat.CurrentLineNumber, expat.CurrentColumnNumber + 1)
@@ -163,17 +181,17 @@ def read_l5x(file: str, text: str, *, spec: spec_ir.Spec | None = None, routine:
                 content = cdata + len("<![CDATA[") - (len(raw) - len(raw.lstrip()))
             else:
                 content = text.find(">", start) + 1
-            rung = parse_neutral_rung(parser, raw, lambda o, c=content: locate_absolute(c + o), number, comment)
+            rung = parse_neutral_rung(parser, raw, functools.partial(shifted_locator, locate_absolute, content), number, comment)
             rungs.append(rung if rung is not None else Rung(number, (), comment, SourceLocation(file, t_line, t_col)))
         routines.append(Routine(name, tuple(rungs), SourceLocation(file, line, col)))
     if not routines and not errors:
         err(chosen, f"program {pname!r} has no ladder routine")
     if errors:
-        raise ProgramError(_capped(errors))
+        raise ProgramError(capped(errors))
     if aliases:
         routines = [_without_aliases(r, aliases, errors) for r in routines]
         if errors:
-            raise ProgramError(_capped(errors))
+            raise ProgramError(capped(errors))
     names = [r.name for r in routines]
     main = routine or chosen.get("MainRoutineName") or names[0]
     if main not in names:
@@ -186,7 +204,7 @@ def read_l5x(file: str, text: str, *, spec: spec_ir.Spec | None = None, routine:
     if unmodelled:
         errors[:] = [_unmodelled_message(d, unmodelled) for d in errors]
     if errors:
-        raise ProgramError(_capped(errors))
+        raise ProgramError(capped(errors))
     return result
 
 

@@ -19,16 +19,33 @@ unless an array subscript or bit number is computed from a tag.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from statecharts.diagnostics import Diagnostic
-from statecharts.program.ir import (Binary, Branch, Element, Expression, Index, IndirectBit, Instruction, Member, Name,
-                                    Number, Operand, Program, Reference, Routine, Scalar, Unary)
-from statecharts.program.tags import INTEGER_BITS, STRUCTURES, TagDatabase, convert, wrap
+from statecharts.program.ir import (
+    Binary,
+    Branch,
+    Element,
+    Expression,
+    Index,
+    IndirectBit,
+    Instruction,
+    Member,
+    Name,
+    Number,
+    Operand,
+    Program,
+    Reference,
+    Routine,
+    Scalar,
+    Unary,
+)
 from statecharts.program.rungtext import operand_slots
+from statecharts.program.tags import INTEGER_BITS, STRUCTURES, TagDatabase, convert, wrap
 
 if TYPE_CHECKING:
     from statecharts.scan import System
@@ -267,7 +284,7 @@ class Ladder:
                 return inst.flags if member == "FLAGS" else inst.values[member]  # type: ignore[return-value]
             if head in system.axes:
                 return system.axes[head].observe()[member]  # type: ignore[return-value]
-        slot, t, bit = self.slot(path)
+        slot, _t, bit = self.slot(path)
         v = self.db.values[slot]
         if bit is not None:
             return bool((int(v) >> bit) & 1)
@@ -313,15 +330,19 @@ def _resolve_static(db: TagDatabase, ref: Reference) -> tuple[int, str, int | No
         element = e
     slot = layout.offset + element * layout.size
     t = layout.data_type
-    if sels and isinstance(sels[0], Member) and t in STRUCTURES:
-        m = layout.member(sels.pop(0).name)  # type: ignore[union-attr]
+    head = sels[0] if sels else None
+    if isinstance(head, Member) and t in STRUCTURES:
+        sels.pop(0)
+        m = layout.member(head.name)
         if m is None:
             return f"{ref}: a {t} has no member {ref.selectors[-1]}; members: {', '.join(n for n, _ in STRUCTURES[t])}"
         slot += m[0]
         t = m[1]
-    bit = None
-    if sels and isinstance(sels[0], Member) and sels[0].bit is not None and t in INTEGER_BITS:
-        bit = sels.pop(0).bit  # type: ignore[union-attr]
+    bit: int | None = None
+    first = sels[0] if sels else None
+    if isinstance(first, Member) and first.bit is not None and t in INTEGER_BITS:
+        sels.pop(0)
+        bit = first.bit
         if bit is not None and bit >= INTEGER_BITS[t]:
             return f"{ref}: bit {bit} is beyond the {INTEGER_BITS[t]} bits of a {t}"
     if sels:
@@ -403,7 +424,7 @@ class _Compiler:
         addr = self.address(ins, ref)
         if addr is None:
             return None
-        locate, t, bit = addr
+        locate, _t, bit = addr
         values = self.values
         if isinstance(locate, int):
             slot = locate
@@ -451,7 +472,7 @@ class _Compiler:
 
             def set_bit(v: Scalar) -> None:
                 s = locate if isinstance(locate, int) else locate()
-                b = bit if isinstance(bit, int) else bit()  # type: ignore[operator]
+                b = bit if isinstance(bit, int) else bit()
                 word = int(values[s])
                 values[s] = wrap(word | (1 << b) if v else word & ~(1 << b), width)
             return set_bit, "BOOL"
@@ -513,9 +534,9 @@ class _Compiler:
                 offset = element
         member_slot = 0
         if sels and isinstance(sels[0], Member) and t in STRUCTURES:
-            m = layout.member(sels[0].name)  # type: ignore[union-attr]
+            m = layout.member(sels[0].name)
             if m is None:
-                self.problem(ins, f"{ref}: a {t} has no member {sels[0].name!r}; members: "  # type: ignore[union-attr]
+                self.problem(ins, f"{ref}: a {t} has no member {sels[0].name!r}; members: "
                                   f"{', '.join(n for n, _ in STRUCTURES[t])}")
                 return None
             sels.pop(0)
@@ -844,10 +865,10 @@ class _Compiler:
         values = self.values
         dt = self.ladder.scan_ms
         rung = self.rung
-        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate  # type: ignore[assignment]
+        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate
 
         def check(b: int) -> None:
-            if values[b] < 0 or values[b + 1] < 0:  # type: ignore[operator]
+            if values[b] < 0 or values[b + 1] < 0:
                 raise ProgramFault(ins, rung, 4, 34, f"negative timer preset or accumulator "
                                                      f"(PRE {values[b]}, ACC {values[b + 1]})")
 
@@ -861,7 +882,7 @@ class _Compiler:
                 return
             acc = int(values[b + 1]) + dt
             values[b + 1] = DINT_MAX if acc > DINT_MAX else acc
-            if values[b + 1] >= values[b]:  # type: ignore[operator]
+            if values[b + 1] >= values[b]:
                 values[b + 4] = True
                 values[b + 3] = False
             else:
@@ -923,7 +944,7 @@ class _Compiler:
                 return rci
             acc = int(values[b + 1]) + dt
             values[b + 1] = DINT_MAX if acc > DINT_MAX else acc
-            if values[b + 1] >= values[b]:  # type: ignore[operator]
+            if values[b + 1] >= values[b]:
                 values[b + 4] = False
                 values[b + 3] = False
             else:
@@ -946,7 +967,7 @@ class _Compiler:
             return None
         locate, _t = located
         values = self.values
-        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate  # type: ignore[assignment]
+        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate
         edge = 2 if up else 3  # CU / CD
 
         def counter_pre() -> None:
@@ -972,7 +993,7 @@ class _Compiler:
             if values[b + 5] or values[b + 6]:
                 values[b + 4] = False
             else:
-                values[b + 4] = values[b + 1] >= values[b]  # type: ignore[operator]
+                values[b + 4] = values[b + 1] >= values[b]
             return rci
         return count
 
@@ -988,7 +1009,7 @@ class _Compiler:
             return None
         locate, t = located
         values = self.values
-        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate  # type: ignore[assignment]
+        base_f: Callable[[], int] = (lambda: locate) if isinstance(locate, int) else locate
         bits = (2, 3, 4) if t == "TIMER" else (2, 3, 4, 5, 6)
 
         def res(rci: bool) -> bool:
@@ -1083,16 +1104,16 @@ class _Compiler:
         return self._compare(ins, lambda x, y: x != y)
 
     def _LES(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
-        return self._compare(ins, lambda x, y: x < y)  # type: ignore[operator]
+        return self._compare(ins, lambda x, y: x < y)
 
     def _LEQ(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
-        return self._compare(ins, lambda x, y: x <= y)  # type: ignore[operator]
+        return self._compare(ins, lambda x, y: x <= y)
 
     def _GRT(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
-        return self._compare(ins, lambda x, y: x > y)  # type: ignore[operator]
+        return self._compare(ins, lambda x, y: x > y)
 
     def _GEQ(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
-        return self._compare(ins, lambda x, y: x >= y)  # type: ignore[operator]
+        return self._compare(ins, lambda x, y: x >= y)
 
     def _LIM(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
         lo, test, hi = (self.reader(ins, o) for o in ins.operands)
@@ -1103,9 +1124,9 @@ class _Compiler:
             if not rci:
                 return False
             low, t, high = lo(), test(), hi()
-            if low <= high:  # type: ignore[operator]
-                return bool(low <= t <= high)  # type: ignore[operator]
-            return bool(t >= low or t <= high)  # type: ignore[operator]
+            if low <= high:
+                return bool(low <= t <= high)
+            return bool(t >= low or t <= high)
         return lim
 
     def _CMP(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
@@ -1173,7 +1194,7 @@ class _Compiler:
         a = self.reader(ins, ins.operands[0])
         if a is None:
             return None
-        return self._math(ins, ins.operands[1], lambda: -a())  # type: ignore[operator]
+        return self._math(ins, ins.operands[1], lambda: -a())
 
     def _CPT(self, ins: Instruction, pre: list[Action], post: list[Action]) -> Run | None:
         f = self.reader(ins, ins.operands[1])
@@ -1267,7 +1288,7 @@ class _Compiler:
                     self.problem(ins, f"{op.text!r} is not a value of {spec_op.name}; values: {', '.join(values)}")
                     continue
                 const: Scalar = v
-                setters.append((spec_op.name, lambda c=const: c))
+                setters.append((spec_op.name, functools.partial(_constant, const)))
                 continue
             get = self.reader(ins, op)
             if get is not None:
@@ -1332,16 +1353,20 @@ def _mod(a: Scalar, b: Scalar) -> Scalar:
         raise _ArithmeticError("division by zero (MOD)")
     if isinstance(x, float) or isinstance(y, float):
         return math.fmod(x, y)
-    return x - _div(x, y) * y  # type: ignore[operator]
+    return x - _div(x, y) * y
+
+
+def _constant(value: Scalar) -> Scalar:
+    return value
 
 
 def _pow(a: Scalar, b: Scalar) -> Scalar:
     x, y = _num(a), _num(b)
     try:
-        r = float(x) ** float(y)
+        r: object = float(x) ** float(y)
     except (OverflowError, ZeroDivisionError):
         raise _ArithmeticError("overflow in **") from None
-    if isinstance(r, complex):
+    if not isinstance(r, float):  # a complex number
         raise _ArithmeticError("** of a negative number with a fractional exponent")
     return r
 

@@ -131,7 +131,7 @@ def _expression(tokens: _Tokens, min_power: int, depth: int) -> Expression:
         raise ExpressionSyntaxError(tokens.peek()[2], f"expression nested deeper than {MAX_DEPTH} levels")
     left = _prefix(tokens, depth)
     while True:
-        kind, op, pos = tokens.peek()
+        kind, op, _pos = tokens.peek()
         if kind != "op" or op not in _BINARY:
             return left
         lp, rp = _BINARY[op]

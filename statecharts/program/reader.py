@@ -20,8 +20,23 @@ from pathlib import Path
 
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError
-from statecharts.program.ir import (AXIS_UNTYPED, Binary, Expression, Index, IndirectBit, Instruction, Member, Number,
-                                    Operand, Program, Reference, Routine, Scalar, Tag, Unary)
+from statecharts.program.ir import (
+    AXIS_UNTYPED,
+    Binary,
+    Expression,
+    Index,
+    IndirectBit,
+    Instruction,
+    Member,
+    Number,
+    Operand,
+    Program,
+    Reference,
+    Routine,
+    Scalar,
+    Tag,
+    Unary,
+)
 from statecharts.program.rungtext import operand_slots, parse_rung_file
 from statecharts.program.tags import STRUCTURES
 
@@ -82,21 +97,21 @@ def parse_program_text(file: str, text: str, *, spec: spec_ir.Spec | None = None
     errors: list[Diagnostic] = []
     form, routines = parse_rung_file(file, text, errors, spec, form)
     if errors:
-        raise ProgramError(_capped(errors))
+        raise ProgramError(capped(errors))
     check_routines(file, routines, errors)
     tags, warnings = infer_tags(file, routines, errors, spec)
     if errors:
-        raise ProgramError(_capped(errors))
+        raise ProgramError(capped(errors))
     return Program(Path(file).stem, routines[0].name, routines, tags, form, file, warnings)
 
 
-def _capped(errors: list[Diagnostic]) -> list[Diagnostic]:
+def capped(errors: list[Diagnostic]) -> list[Diagnostic]:
     unique = sorted(set(errors))
     if len(unique) <= MAX_DIAGNOSTICS:
         return unique
     last = unique[MAX_DIAGNOSTICS - 1]
-    return unique[:MAX_DIAGNOSTICS - 1] + [Diagnostic(last.file, last.line, last.column, "", (
-        f"... and {len(unique) - MAX_DIAGNOSTICS + 1} more problems"))]
+    more = len(unique) - MAX_DIAGNOSTICS + 1
+    return [*unique[:MAX_DIAGNOSTICS - 1], Diagnostic(last.file, last.line, last.column, "", f"... and {more} more problems")]
 
 
 def _diag(ins: Instruction, rung: int, message: str) -> Diagnostic:
@@ -198,7 +213,7 @@ def infer_tags(file: str, routines: tuple[Routine, ...], errors: list[Diagnostic
             for ins in rung.instructions():
                 kinds = operand_kinds(ins, spec)
                 real = any(_has_real(o) for o in ins.operands)
-                for k, (op, kind) in enumerate(zip(ins.operands, kinds)):
+                for _k, (op, kind) in enumerate(zip(ins.operands, kinds)):
                     for ref, top in references(op):
                         use = uses.setdefault(ref.base, _Use())
                         if use.first is None:
@@ -229,38 +244,38 @@ def infer_tags(file: str, routines: tuple[Routine, ...], errors: list[Diagnostic
     listing: list[str] = []
     for name, use in uses.items():
         assert use.first is not None
-        ins, rung = use.first
-        kinds = use.kinds
+        ins, rung_no = use.first
+        use_kinds = use.kinds
         data_type: str | None = None
-        structural = kinds & {"axis", "motion", "timer", "counter"}
+        structural = use_kinds & {"axis", "motion", "timer", "counter"}
         if len(structural) > 1:
-            errors.append(_diag(ins, rung, f"tag {name!r} is used as {' and as '.join(sorted(structural))}"))
+            errors.append(_diag(ins, rung_no, f"tag {name!r} is used as {' and as '.join(sorted(structural))}"))
             continue
-        if "axis" in kinds:
+        if "axis" in use_kinds:
             data_type = AXIS_UNTYPED
-        elif "motion" in kinds:
+        elif "motion" in use_kinds:
             data_type = "MOTION_INSTRUCTION"
-        elif "timer" in kinds:
+        elif "timer" in use_kinds:
             data_type = "TIMER"
-        elif "counter" in kinds:
+        elif "counter" in use_kinds:
             data_type = "COUNTER"
         elif use.members:
             candidates = [t for t, ms in STRUCTURES.items() if use.members <= {m for m, _ in ms}]
             if len(candidates) == 1:
                 data_type = candidates[0]
             else:
-                errors.append(_diag(ins, rung, (
+                errors.append(_diag(ins, rung_no, (
                     f"cannot infer the data type of {name!r}: only its member(s) {', '.join(sorted(use.members))} are used; "
                     f"use it in a TON/CTU/motion instruction, or declare it in an L5X export")))
                 continue
-        elif "timer_or_counter" in kinds:
-            errors.append(_diag(ins, rung, f"cannot tell whether {name!r} is a TIMER or a COUNTER (only RES uses it)"))
+        elif "timer_or_counter" in use_kinds:
+            errors.append(_diag(ins, rung_no, f"cannot tell whether {name!r} is a TIMER or a COUNTER (only RES uses it)"))
             continue
         else:
-            bitwise = kinds & {"bit_in", "bit_out"}
-            numeric = kinds & {"value", "dest", "expression", "array"}
+            bitwise = use_kinds & {"bit_in", "bit_out"}
+            numeric = use_kinds & {"value", "dest", "expression", "array"}
             if bitwise and not use.bits and numeric:
-                errors.append(_diag(ins, rung, (f"tag {name!r} is used both as a BOOL (by a contact or coil) and as a number; "
+                errors.append(_diag(ins, rung_no, (f"tag {name!r} is used both as a BOOL (by a contact or coil) and as a number; "
                                                 f"use a bit of it ({name}.0) or two tags")))
                 continue
             if bitwise and not use.bits:
@@ -268,25 +283,25 @@ def infer_tags(file: str, routines: tuple[Routine, ...], errors: list[Diagnostic
             else:
                 data_type = "REAL" if use.real and not use.bits else "DINT"
         if data_type in ("TIMER", "COUNTER", "MOTION_INSTRUCTION") and use.bits and not use.members:
-            errors.append(_diag(ins, rung, f"{name!r} is a {data_type}; select a member before a bit"))
+            errors.append(_diag(ins, rung_no, f"{name!r} is a {data_type}; select a member before a bit"))
             continue
         dims: tuple[int, ...] = ()
         if use.subscripts or use.computed_subscript:
             if data_type == AXIS_UNTYPED:
-                errors.append(_diag(ins, rung, f"axis {name!r} cannot be an array"))
+                errors.append(_diag(ins, rung_no, f"axis {name!r} cannot be an array"))
                 continue
             if not use.subscripts:
-                errors.append(_diag(ins, rung, (f"cannot infer the size of array {name!r}: every subscript is computed; "
+                errors.append(_diag(ins, rung_no, (f"cannot infer the size of array {name!r}: every subscript is computed; "
                                                 f"use an immediate subscript somewhere or declare it in an L5X export")))
                 continue
             ranks = {len(s) for s in use.subscripts}
             if len(ranks) > 1:
-                errors.append(_diag(ins, rung, f"array {name!r} is used with {' and '.join(map(str, sorted(ranks)))} subscripts"))
+                errors.append(_diag(ins, rung_no, f"array {name!r} is used with {' and '.join(map(str, sorted(ranks)))} subscripts"))
                 continue
             rank = ranks.pop()
             dims = tuple(max(s[d] for s in use.subscripts) + 1 for d in range(rank))
             if any(min(s[d] for s in use.subscripts) < 0 for d in range(rank)):
-                errors.append(_diag(ins, rung, f"array {name!r} has a negative subscript"))
+                errors.append(_diag(ins, rung_no, f"array {name!r} has a negative subscript"))
                 continue
         tags.append(Tag(name, data_type, dims, tuple((k, v) for k, v in dict(use.shown).items() if v), inferred=True,
                         location=use.first[0].location))

@@ -29,8 +29,7 @@ from dataclasses import dataclass
 
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic
-from statecharts.program.ir import (Branch, Element, Instruction, Name, Number, Operand, Placeholder, Routine,
-                                    Rung, SourceLocation)
+from statecharts.program.ir import Branch, Element, Instruction, Name, Number, Operand, Placeholder, Routine, Rung, SourceLocation
 from statecharts.program.logix_expr import ExpressionSyntaxError, parse_expression, parse_reference
 from statecharts.program.table import instruction_table
 
@@ -302,6 +301,11 @@ def _split_operands(text: str, start: int) -> tuple[list[tuple[str, int]], int] 
     return None
 
 
+def shifted_locator(locate: Callable[[int], tuple[int, int]], start: int, offset: int) -> tuple[int, int]:
+    """``locate`` for an offset counted from ``start``."""
+    return locate(start + offset)
+
+
 def parse_neutral_rung(parser: RungParser, text: str, locate: Callable[[int], tuple[int, int]], rung: int,
                        comment: str = "") -> Rung | None:
     """One neutral-text rung (``;`` optional); ``locate(offset)`` gives the (line, column) of an offset."""
@@ -476,7 +480,7 @@ def parse_rung_file(file: str, text: str, errors: list[Diagnostic], spec: spec_i
                     p = offsets[line0]
                     continue
             end = _rung_end(text, p)
-            rung = parse_neutral_rung(parser, text[p:end], lambda o, s=p: locate(s + o), len(current), " ".join(comment))
+            rung = parse_neutral_rung(parser, text[p:end], functools.partial(shifted_locator, locate, p), len(current), " ".join(comment))
             current.append(rung if rung is not None else Rung(len(current), (), "", SourceLocation(file, line0, col0)))
             comment = []
             p = end

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from statecharts import expectations
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError, ScenarioError
 from statecharts.engine import AxisInstance
@@ -34,9 +35,19 @@ from statecharts.program.ir import AXIS_UNTYPED, Program
 from statecharts.program.ladder import Ladder, ProgramFault
 from statecharts.program.reader import load_program
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
-from statecharts import expectations
-from statecharts.scenario import (AxisSetup, Mismatch, Scenario, ScanRow, ScenarioResult, Step, _numeric_observable,
-                                  _passes_through, _step_mismatches, _value_problem, _visit_recorders)
+from statecharts.scenario import (
+    AxisSetup,
+    Mismatch,
+    ScanRow,
+    Scenario,
+    ScenarioResult,
+    Step,
+    _numeric_observable,
+    _passes_through,
+    _step_mismatches,
+    _visit_recorders,
+    value_problem,
+)
 
 Expectation = tuple[str, str, object]  # (observation object, field, value)
 
@@ -103,7 +114,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
                 err((*parts, tpath), f"cannot write {tpath!r}: {exc.args[0]}")
                 continue
             kind = "bool" if t == "BOOL" or bit is not None else ("real" if t == "REAL" else "int")
-            problem = _value_problem(kind, None, value)
+            problem = value_problem(kind, None, value)
             if problem:
                 err((*parts, tpath), f"{tpath} is a {'BOOL' if bit is not None else t}: {problem}")
                 continue
@@ -163,13 +174,13 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
         writes = check_tag_values(s.get("tags", {}), (*p, "tags"))
         events = []
         for j, e in enumerate(s.get("events", [])):
-            chart = charts.get(e["axis"])
-            if chart is None:
+            event_chart = charts.get(e["axis"])
+            if event_chart is None:
                 err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}; axes: {', '.join(charts)}")
                 continue
-            env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
+            env_events = [ev.name for ev in event_chart.events if ev.kind == "environment"]
             if e["event"] not in env_events:
-                err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {chart.id}; "
+                err((*p, "events", j, "event"), f"{e['event']!r} is not an environment event of {event_chart.id}; "
                                                 f"expected one of: {', '.join(env_events)}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         expect: list[Expectation] = []

@@ -37,6 +37,7 @@ from statecharts.render.mermaid import chart_mermaid, flowchart_mermaid, instruc
 from statecharts.render.scxml import ScxmlUnsupported, chart_scxml
 
 __all__ = [
+    "ScxmlUnsupported",
     "UnknownTarget",
     "build_flowchart",
     "chart_dot",
@@ -47,7 +48,6 @@ __all__ = [
     "instruction_dot",
     "instruction_mermaid",
     "resolve",
-    "ScxmlUnsupported",
 ]
 
 

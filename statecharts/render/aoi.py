@@ -37,7 +37,7 @@ from statecharts.aoi import AoiSpec, RecoveryState, SubInstruction, aoi_files, l
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.loader import bundled_spec_dir, read_yaml
 from statecharts.render.dot import FONT, MONO, esc, html_lines, html_table, sorted_attrs
-from statecharts.render.flowchart import FlowEdge, FlowNode, Flowchart, flowchart_dot
+from statecharts.render.flowchart import Flowchart, FlowEdge, FlowNode, flowchart_dot
 from statecharts.render.labels import paragraph, wrap
 from statecharts.render.mermaid import INDENT, flowchart_mermaid, text
 from statecharts.render.reference import (
@@ -238,9 +238,9 @@ def aoi_spec_dirs(paths: Sequence[Path | str] | None) -> list[Path]:
     dirs: list[Path] = []
     for p in paths:
         d = Path(p)
-        if d.is_dir() and ((d / "aoi").is_dir() or (d / "instructions" / "motion").is_dir()):
-            if all(d.resolve() != x.resolve() for x in dirs):
-                dirs.append(d)
+        if (d.is_dir() and ((d / "aoi").is_dir() or (d / "instructions" / "motion").is_dir())
+                and all(d.resolve() != x.resolve() for x in dirs)):
+            dirs.append(d)
     return dirs
 
 
@@ -490,14 +490,14 @@ def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
     nodes.append(FlowNode("execute", "process", ("A new execution starts", "(the rung was false before)")))
     edges.append(FlowEdge("start", "execute"))
     prev = "execute"
-    for row in doc.checks:
-        did, eid = f"check_{row.id}", f"err_{row.id}"
-        name = doc.error_name(row.code) or row.id
-        title = [f"{row.number}. {line}" if i == 0 else line for i, line in enumerate(paragraph(name + "?", 30))]
-        if row.applies is not None:
-            title.append(f"(only when {applies_text(row.applies)})")
-        nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(row.fails, 30))))
-        nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {row.code}", *paragraph(name, 34))))
+    for check in doc.checks:
+        did, eid = f"check_{check.id}", f"err_{check.id}"
+        name = doc.error_name(check.code) or check.id
+        title = [f"{check.number}. {line}" if i == 0 else line for i, line in enumerate(paragraph(name + "?", 30))]
+        if check.applies is not None:
+            title.append(f"(only when {applies_text(check.applies)})")
+        nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(check.fails, 30))))
+        nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {check.code}", *paragraph(name, 34))))
         edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
         edges.append(FlowEdge(did, eid, "yes"))
         side.append((did, eid))
@@ -529,9 +529,9 @@ def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
             nodes.append(FlowNode(sid, "process", (s.id, *paragraph(row.description, 34))))
             continue
         sub = doc.sub(s.call.instruction)
-        title = (f"{s.id}: {s.call.instruction}" + (f" ({sub.sub.name})" if sub else ""),
-                 *paragraph(call_text(s).split(" on ", 1)[-1], 40), "Sts_IP set while it is in process")
-        nodes.append(FlowNode(sid, "process", title, tuple(operand_lines(s))))
+        call_title = (f"{s.id}: {s.call.instruction}" + (f" ({sub.sub.name})" if sub else ""),
+                      *paragraph(call_text(s).split(" on ", 1)[-1], 40), "Sts_IP set while it is in process")
+        nodes.append(FlowNode(sid, "process", call_title, tuple(operand_lines(s))))
         eid = f"err_state_{s.id}"
         nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {s.error}",
                                              f"Sts_EXERR = {s.call.instruction} .ERR",
@@ -668,7 +668,7 @@ def recovery_dot(doc: AoiDocument) -> str:
         r.attr(rank="same")
         r.node("idle")
         r.node("__routines__")
-    return g.source
+    return str(g.source)
 
 
 _MERMAID_ERROR = "error_exit"  # cannot clash with a spec state: ``_mid`` gives ``s_<id>``
@@ -954,8 +954,8 @@ def aoi_uses(doc: AoiDocument) -> dict[str, list[Use]]:
     add(doc.prov, f"add-on instruction {doc.id}", page)
     for i in doc.inputs:
         add(i.prov, f"{doc.id} input {i.name}", f"{page}#inputs")
-    for o in doc.outputs:
-        add(o.prov, f"{doc.id} output {o.name}", f"{page}#outputs-status-members")
+    for out in doc.outputs:
+        add(out.prov, f"{doc.id} output {out.name}", f"{page}#outputs-status-members")
     for e in doc.errors:
         add(e.prov, f"{doc.id} error code {e.code}", f"{page}#{anchor('code-' + str(e.code))}")
     for c in doc.checks:
@@ -971,17 +971,17 @@ def aoi_uses(doc: AoiDocument) -> dict[str, list[Use]]:
     add(doc.prescan.prov, f"{doc.id} prescan routine", f"{page}#completion-rung-false-and-prescan")
     if doc.world_prov is not None:
         add(doc.world_prov, f"{doc.id} world", f"{page}#the-world-it-runs-in")
-    for o in doc.world:
-        link = f"{page}#{anchor('world-' + o.kind)}"
-        add(o.prov, f"{doc.id} world object {o.kind} ({o.chart})", link)
-        for f in o.facts:
-            add(f.prov, f"{doc.id} world fact {o.kind}.{f.name}", link)
-    for s in doc.subs:
-        link = f"{page}#{anchor('sub-' + s.sub.mnemonic)}"
-        add(s.prov, f"sub-instruction {s.sub.mnemonic}", link)
-        add(s.completes, f"sub-instruction {s.sub.mnemonic} completion", link)
-        for c in s.checks:
-            add(c.prov, f"sub-instruction {s.sub.mnemonic} precondition {c.number} (.ERR {c.err})", link)
+    for obj in doc.world:
+        link = f"{page}#{anchor('world-' + obj.kind)}"
+        add(obj.prov, f"{doc.id} world object {obj.kind} ({obj.chart})", link)
+        for f in obj.facts:
+            add(f.prov, f"{doc.id} world fact {obj.kind}.{f.name}", link)
+    for sd in doc.subs:
+        link = f"{page}#{anchor('sub-' + sd.sub.mnemonic)}"
+        add(sd.prov, f"sub-instruction {sd.sub.mnemonic}", link)
+        add(sd.completes, f"sub-instruction {sd.sub.mnemonic} completion", link)
+        for sc in sd.checks:
+            add(sc.prov, f"sub-instruction {sd.sub.mnemonic} precondition {sc.number} (.ERR {sc.err})", link)
     return uses
 
 
@@ -1003,8 +1003,8 @@ INDEX_HEADER = ("Add-on instruction", "Checks", "Codes", "Recovery states", "Cal
 
 __all__ = [
     "APPLIES_INPUT",
-    "AoiDocument",
     "INDEX_HEADER",
+    "AoiDocument",
     "aoi_flowchart_dot",
     "aoi_flowchart_mermaid",
     "aoi_page",

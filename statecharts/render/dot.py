@@ -239,7 +239,7 @@ class _ChartDiagram:
         g.edge(tail, head, **attrs)
         for tail, head, attrs in edges:
             g.edge(tail, head, **attrs)
-        return g.source
+        return str(g.source)
 
     def states(self, g: graphviz.Digraph, states: Iterable[ir.State]) -> None:
         for s in states:

@@ -235,7 +235,7 @@ def flowchart_dot(fc: Flowchart) -> str:
         if e.back:
             attrs["style"] = "dashed"
         g.edge(e.source, e.target, **sorted_attrs(attrs))
-    return g.source
+    return str(g.source)
 
 
 def instruction_dot(spec: ir.Spec, ins: ir.Instruction) -> str:

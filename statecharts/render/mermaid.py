@@ -71,7 +71,7 @@ def chart_mermaid(chart: ir.Chart) -> str:
 
     def emit(states: list[ir.State], depth: int) -> None:
         pad = INDENT * depth
-        for i, s in enumerate(states):
+        for s in states:
             title = text(state_title(s))
             if s.kind is ir.StateKind.COMPOUND:
                 out.append(f'{pad}state "{title}" as {_sid(s.id)} {{')

@@ -123,15 +123,15 @@ def interpretation_uses(spec: ir.Spec) -> dict[str, list[Use]]:
         for ab in i.aborts:
             add(ab.provenance, f"{i.id} abort {ab.id}", f"{page}#{anchor('check-' + ab.id)}")
         add(i.done_provenance, f"{i.id} completion (DN)", f"{page}#request-and-completion")
-    for t in spec.tables:
-        add(t.provenance, f"execution table {t.id}", "index.md#execution-tables")
-        for r in t.rows:
-            add(r.provenance, f"execution table {t.id}, row {r.condition}", "index.md#execution-tables")
+    for tbl in spec.tables:
+        add(tbl.provenance, f"execution table {tbl.id}", "index.md#execution-tables")
+        for r in tbl.rows:
+            add(r.provenance, f"execution table {tbl.id}, row {r.condition}", "index.md#execution-tables")
     add(spec.tag_type.provenance, f"tag type {spec.tag_type.name}", "index.md#the-motion_instruction-tag")
     for m in spec.tag_type.members:
         add(m.provenance, f"{spec.tag_type.name}.{m.name}", "index.md#the-motion_instruction-tag")
-    for e in spec.errors:
-        add(e.provenance, f"error code {e.code} {e.name}", f"error-codes.md#{anchor('err-' + str(e.code))}")
+    for code in spec.errors:
+        add(code.provenance, f"error code {code.code} {code.name}", f"error-codes.md#{anchor('err-' + str(code.code))}")
     for x in spec.extended_errors:
         add(x.provenance, f"{x.instruction} extended error {x.err}/{x.exerr} {x.name}", "error-codes.md#extended-error-codes")
     return {k: sorted(set(v), key=lambda u: u.label) for k, v in sorted(uses.items())}
@@ -414,13 +414,13 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
     out += ["", "## Extended error codes", ""]
     rows = []
     for x in spec.extended_errors:
-        ins = next((i for i in spec.instructions if i.id == x.instruction), None)
-        checks = [c for c in ((*ins.checks, *ins.aborts) if ins else ()) if (c.err, c.exerr) == (x.err, x.exerr)]
+        owner = next((i for i in spec.instructions if i.id == x.instruction), None)
+        x_checks = [c for c in ((*owner.checks, *owner.aborts) if owner else ()) if (c.err, c.exerr) == (x.err, x.exerr)]
         rows.append([
             f"[{x.instruction}](instructions/{x.instruction}.md)", str(x.err), str(x.exerr), f"`{x.name}`",
             cell(x.meaning), cell(confidence(x.confidence)), cell(x.provenance.source),
             interp_link(x.provenance.interpretation, ""),
-            ", ".join(f"[{c.id}](instructions/{x.instruction}.md#{anchor('check-' + c.id)})" for c in checks)
+            ", ".join(f"[{c.id}](instructions/{x.instruction}.md#{anchor('check-' + c.id)})" for c in x_checks)
             or "— (documented, not modelled)",
         ])
     out += table(["Instruction", "ERR", "EXERR", "Name", "Meaning", "Confidence", "Source", "Interpretation",

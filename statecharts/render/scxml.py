@@ -42,10 +42,11 @@ from __future__ import annotations
 import ast
 import re
 from collections.abc import Mapping
+from typing import cast
 from xml.sax.saxutils import escape, quoteattr
 
 from statecharts import ir
-from statecharts.engine import DEFAULT_PARAMETERS, _ordered
+from statecharts.engine import DEFAULT_PARAMETERS, ordered_transitions
 from statecharts.expr import Assignment, Expr
 from statecharts.render.labels import children
 
@@ -76,7 +77,7 @@ class ScxmlUnsupported(ValueError):
 class _Rewriter:
     """Rewrites one expression AST into the subset python-statemachine evaluates."""
 
-    def __init__(self, fail: "_Fail") -> None:
+    def __init__(self, fail: _Fail) -> None:
         self.fail = fail
 
     def value(self, node: ast.expr, boolean: bool = False) -> ast.expr:
@@ -186,7 +187,7 @@ def _replace(node: ast.AST, old: ast.AST, new: ast.expr) -> ast.expr:
             fields[name] = _replace(value, old, new)
         else:
             fields[name] = value
-    return type(node)(**fields)  # type: ignore[return-value]
+    return cast(ast.expr, type(node)(**fields))  # node is an expression, so is its copy
 
 
 def _unparse(node: ast.expr) -> str:
@@ -301,7 +302,7 @@ class _Writer:
         self.lines.append(f"{pad}<{tag} {' '.join(attrs)}>")
         self.actions("onentry", s.entry, depth + 1, f"state {s.id} entry")
         self.actions("onexit", s.exit, depth + 1, f"state {s.id} exit")
-        for t in _ordered(x for x in chart.transitions if x.source == s.id):
+        for t in ordered_transitions(x for x in chart.transitions if x.source == s.id):
             self.transition(t, depth + 1)
         for c in children(chart, s.id):
             self.state(c, depth + 1)

@@ -24,6 +24,7 @@ from statecharts import ir
 from statecharts.aoi import AoiScenario
 from statecharts.diagnostics import InputError
 from statecharts.scenario import load_scenario, run_scenario, scenario_files
+from statecharts.values import as_int
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -80,7 +81,7 @@ class Traceability:
 def display_path(path: Path, root: Path) -> str:
     """``path`` relative to the parent of the scenario root (never absolute)."""
     p = path.resolve()
-    base = root.resolve().parent if root.is_dir() else root.resolve().parent
+    base = root.resolve().parent
     try:
         return p.relative_to(base).as_posix()
     except ValueError:
@@ -107,12 +108,12 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
                 continue
             try:
                 result = run_scenario(scenario, spec)
-            except Exception as exc:  # noqa: BLE001 - a crashing scenario is reported, not raised
+            except Exception as exc:
                 problems.append(ScenarioProblem(shown, f"crashed: {type(exc).__name__}: {exc}"))
                 continue
             charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
             instr = {p.tag: p.instruction for p in scenario.program}
-            instances = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
+            instances: set[str] = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
             states: set[tuple[str, str]] = set()
             errors: set[tuple[str, int, int]] = set()
             done: set[str] = set()
@@ -125,7 +126,7 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
                         if isinstance(fields.get("state"), str):
                             aoi_states.add(str(fields["state"]))
                         if fields.get("Sts_ER"):
-                            aoi_errors.add((int(fields.get("Sts_ERR", 0)), int(fields.get("Sts_EXERR", 0))))
+                            aoi_errors.add((as_int(fields.get("Sts_ERR", 0)), as_int(fields.get("Sts_EXERR", 0))))
                         aoi_done = aoi_done or bool(fields.get("Sts_PC"))
                     elif obj in charts:
                         chart = charts[obj]
@@ -134,7 +135,7 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
                             states.update((chart.id, s) for s in chart.ancestors(leaf))
                     elif obj in instr:
                         if fields.get("ER"):
-                            errors.add((instr[obj], int(fields.get("ERR", 0)), int(fields.get("EXERR", 0))))
+                            errors.add((instr[obj], as_int(fields.get("ERR", 0)), as_int(fields.get("EXERR", 0))))
                         if fields.get("DN"):
                             done.add(instr[obj])
             runs.append(ScenarioRun(

@@ -67,7 +67,7 @@ def main() -> int:
                     continue
             obs = json.loads(json.dumps(current["scans"][k]["expect"]))
             if mode == "wrong" and k == 1:
-                for name, fields in obs.items():
+                for _name, fields in obs.items():
                     if "DN" in fields:
                         fields["DN"] = not fields["DN"]
                         break

@@ -1,0 +1,97 @@
+"""The compiled checker core against the interpreter back-end of the search.
+
+Two implementations of the same transition system: :func:`checker.search.explore_interpreted`
+loads a whole :class:`statecharts.scan.System` of IR-interpreted axes for every step,
+:func:`checker.search.explore` composes memoised pieces over integer vectors
+(:mod:`checker.core`).  They must build the same state graph: the same numbers of
+states and transitions, the same depth, the same verdicts (each property violated or
+reached at the same least depth), the same deadlocks and the same coverage -- on random
+small systems drawn from the spec (here) and on every bundled system (``make deep``,
+``test_bundled_systems_agree``; the interpreter needs minutes for them).
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from checker.model import Model, ModelError
+from checker.properties import load_properties
+from checker.search import SearchResult, explore, explore_interpreted, stored_bytes
+from checker.system import SystemDef, bundled_systems, load_system
+from motionchart.strategies import checking_systems
+from statecharts import ir
+
+#: random systems larger than this are skipped (the interpreter explores them slowly)
+LIMIT = 2000
+
+
+def _same(a: SearchResult, b: SearchResult) -> None:
+    ga, gb = _graph(a), _graph(b)
+    for key in ga:
+        assert ga[key] == gb[key], f"{key}: compiled {ga[key]!r} != interpreted {gb[key]!r}"
+
+
+def _graph(r: SearchResult) -> dict[str, object]:
+    cov = r.coverage
+    return {
+        "states": r.states, "transitions": r.transitions, "depth": r.depth, "complete": r.complete,
+        "violated": {k: w.depth for k, w in r.violations.items()},
+        "reached": {k: w.depth for k, w in r.reached.items()},
+        "deadlocks": len(r.deadlocks),
+        "configs": cov.configs, "fired": cov.fired, "executed": cov.executed, "errors": cov.errors,
+        "values": cov.values,
+    }
+
+
+@pytest.fixture(scope="module")
+def base(spec: ir.Spec) -> SystemDef:
+    return load_system(bundled_systems()["noncip"], spec)
+
+
+@settings(suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much], max_examples=10)
+@given(data=st.data())
+def test_random_small_systems_agree(spec: ir.Spec, base: SystemDef, data: st.DataObject) -> None:
+    sysdef = data.draw(checking_systems(spec, base), label="system")
+    props = load_properties(spec)
+    try:
+        compiled = explore(Model(spec, sysdef, props), progress=False, max_states=LIMIT)
+    except ModelError:
+        assume(False)
+        return
+    assume(compiled.complete)
+    interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False)
+    _same(compiled, interpreted)
+
+
+def test_two_interchangeable_axes_agree(spec: ir.Spec, base: SystemDef) -> None:
+    import dataclasses
+
+    g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MAFR"),
+                            configurations=base.groups[0].configurations[:1])
+    sysdef = dataclasses.replace(base, name="two_axes", groups=(g,), max_live_calls=1)
+    props = load_properties(spec)
+    compiled = explore(Model(spec, sysdef, props), progress=False)
+    interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False)
+    assert compiled.complete and compiled.states > 20
+    _same(compiled, interpreted)
+
+
+@pytest.mark.skipif(not os.environ.get("MOTIONCHART_DEEP"), reason="minutes on the interpreter: make deep")
+@pytest.mark.parametrize("name", sorted(bundled_systems()))
+def test_bundled_systems_agree(spec: ir.Spec, name: str) -> None:
+    sysdef = load_system(bundled_systems()[name], spec)
+    props = load_properties(spec)
+    compiled = explore(Model(spec, sysdef, props), progress=False)
+    interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False)
+    assert compiled.complete and interpreted.complete
+    _same(compiled, interpreted)
+
+
+def test_stored_state_is_compact(spec: ir.Spec, base: SystemDef) -> None:
+    result = explore(Model(spec, base, load_properties(spec)), progress=False, max_states=20000)
+    per_state = stored_bytes(result) / result.states
+    assert per_state < 200, per_state

@@ -353,6 +353,17 @@ def bundled_aoi() -> AoiSpec:
     return load_aoi()
 
 
+def _check_sources(name: str, tree: Any, errors: list[Diagnostic], spec_dir: Path) -> None:
+    """Every ``source:`` of the file must resolve to the sources registry of its spec."""
+    from statecharts import sources
+
+    registry, problems = sources.registry_for([spec_dir / sources.SOURCES_FILE]
+                                              if (spec_dir / sources.SOURCES_FILE).is_file() else [])
+    errors.extend(problems)
+    if registry is not None:
+        errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+
+
 def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     """Load the add-on instruction and its sub-instructions; raise SpecError with every problem."""
     aoi_paths, sub_paths = aoi_files(Path(spec_dir) if spec_dir else None)
@@ -368,6 +379,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         if len(errors) > before:
             continue
         _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
+        _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
         d = plain_data(tree)["instruction"]
         sub_checks: list[SubCheck] = []
         for i, c in enumerate(d["checks"]):
@@ -440,6 +452,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         if e is not None:
             on_done.append((e, o["set"]))
     _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
+    _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
     abort = d["rung_false"].get("abort_call")
     if abort is not None and abort not in mnemonics:
         errors.append(Diagnostic(f, 1, 1, "aoi.rung_false.abort_call", f"unknown sub-instruction {abort!r}"))

@@ -7,12 +7,10 @@ loads a whole :class:`statecharts.scan.System` of IR-interpreted axes for every 
 states and transitions, the same depth, the same verdicts (each property violated or
 reached at the same least depth), the same deadlocks and the same coverage -- on random
 small systems drawn from the spec (here) and on every bundled system (``make deep``,
-``test_bundled_systems_agree``; the interpreter needs minutes for them).
+``test_bundled_systems_agree``, marked ``deep``: the interpreter needs minutes for them).
 """
 
 from __future__ import annotations
-
-import os
 
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
@@ -80,7 +78,7 @@ def test_two_interchangeable_axes_agree(spec: ir.Spec, base: SystemDef) -> None:
     _same(compiled, interpreted)
 
 
-@pytest.mark.skipif(not os.environ.get("MOTIONCHART_DEEP"), reason="minutes on the interpreter: make deep")
+@pytest.mark.deep
 @pytest.mark.parametrize("name", sorted(bundled_systems()))
 def test_bundled_systems_agree(spec: ir.Spec, name: str) -> None:
     sysdef = load_system(bundled_systems()[name], spec)

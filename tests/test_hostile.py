@@ -70,13 +70,13 @@ def _noncip(docs: dict[str, Any]) -> dict[str, Any]:
 
 def _add_transitions(*ts: dict[str, Any]) -> Callable[[dict[str, Any]], None]:
     def edit(docs: dict[str, Any]) -> None:
-        _noncip(docs)["transitions"].extend({"source": "test", **t} for t in ts)
+        _noncip(docs)["transitions"].extend({"source": "MC tests/test_hostile.py", **t} for t in ts)
     return edit
 
 
 def _add_variable(v: dict[str, Any]) -> Callable[[dict[str, Any]], None]:
     def edit(docs: dict[str, Any]) -> None:
-        _noncip(docs)["variables"].append({"source": "test", **v})
+        _noncip(docs)["variables"].append({"source": "MC tests/test_hostile.py", **v})
     return edit
 
 
@@ -203,7 +203,7 @@ def test_integers_beyond_a_dint_are_refused(where: str) -> None:
             _noncip(docs)["states"][1]["value"] = 2**70
         else:
             _noncip(docs)["variables"].append({"name": "Big", "type": "int", "initial": 0, "range": [0, 2**80],
-                                               "source": "test"})
+                                               "source": "MC tests/test_hostile.py"})
     assert any("outside the DINT range" in e for e in _spec_errors(edit))
 
 

@@ -506,9 +506,9 @@ def test_check_on_an_undecided_eventless_loop_is_a_located_error(
     yaml = YAML(typ="rt")
     yaml.width = 10**6
     tree = yaml.load(chart_file.read_text())
-    tree["chart"]["variables"].append({"name": "N", "type": "int", "initial": 0, "source": "test"})
+    tree["chart"]["variables"].append({"name": "N", "type": "int", "initial": 0, "source": "MC tests/test_hostile.py"})
     tree["chart"]["transitions"].append({"id": "count", "from": "AxisReady", "guard": "N >= 0",
-                                         "actions": ["N = N + 1"], "priority": -9, "source": "test"})
+                                         "actions": ["N = N + 1"], "priority": -9, "source": "MC tests/test_hostile.py"})
     with chart_file.open("w") as fh:
         yaml.dump(tree, fh)
     assert main(["check", "-q", "--spec", str(spec)]) == 1

@@ -323,7 +323,8 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
         return EXIT_USAGE
     files = scenario_files(args.scenarios)
     if not files:
-        print("motionchart simulate: no scenario files (*.yaml, *.yml, *.json) found", file=sys.stderr)
+        print(f"motionchart simulate: no scenario files (*.yaml, *.yml, *.json) found in "
+              f"{', '.join(shown_name(p) for p in args.scenarios)}", file=sys.stderr)
         return EXIT_USAGE
     try:
         spec = load_spec(args.spec)

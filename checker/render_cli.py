@@ -36,7 +36,8 @@ from pathlib import Path
 from typing import Any
 
 from statecharts.diagnostics import InputError
-from statecharts.inputs import path_argument_problem, shown_name
+from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
+from statecharts.outputs import replace_folder
 
 COMMANDS = ("diagram", "docs", "generate")
 FORMATS = ("dot", "svg", "png", "pdf", "mermaid")
@@ -210,6 +211,9 @@ def _scenario_roots(args: argparse.Namespace) -> list[str]:
 def _check_out_dir(out: Path, prog: str) -> int | None:
     if out.exists() and not out.is_dir():
         return _fail(prog, f"{out} exists and is not a directory")
+    problem = output_path_problem(str(out), directory=True)
+    if problem is not None:  # found before the work, not after it
+        return _fail(prog, f"cannot write {shown_name(out)}: {problem}")
     return None
 
 
@@ -237,7 +241,7 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     docs = load_aoi_documents(args.spec)
     artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=False)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=False))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged); "
@@ -272,7 +276,7 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
         return EXIT_FAIL
     artefacts = build(spec, _scenario_roots(args), out, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=True)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged, "

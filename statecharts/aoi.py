@@ -1351,10 +1351,28 @@ def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding
                                    f"{entry[fb.name]!r} at set-up")
 
 
+def _oversized_integers(name: str, tree: Any) -> list[Diagnostic]:
+    """Integers no Logix tag holds (beyond LINT) and no REAL can stand for: refused, located
+    (NaN and infinities stay allowed: they are inputs the add-on instruction checks)."""
+    out: list[Diagnostic] = []
+    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
+    while stack:
+        node, parts = stack.pop()
+        if isinstance(node, Mapping):
+            stack.extend((v, (*parts, k)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
+        elif isinstance(node, int) and not isinstance(node, bool) and not -(2**63) <= node < 2**63:
+            line, col = locate(tree, parts)
+            out.append(Diagnostic(name, line, col, node_path(parts), "integer beyond 64 bits (the LINT range)"))
+    return out
+
+
 def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario:
     """Check an AOI scenario (already parsed) against its schema and the AOI spec."""
     name = str(path)
     errors: list[Diagnostic] = list(schema_diagnostics(name, tree, SCENARIO_SCHEMA, "an add-on instruction scenario"))
+    errors.extend(_oversized_integers(name, tree))
     if errors:
         raise ScenarioError(errors)
     doc = plain_data(tree)

@@ -52,6 +52,7 @@ test: install
 # Diagrams, reference docs and SCXML in generated/, rebuilt from the spec.
 generate: install
 	@$(BIN)/motionchart generate
+	@$(BIN)/python tools/write_sources_doc.py
 
 # Checker speed against a hand-written reference BFS (prints figures; not a test).
 bench: install

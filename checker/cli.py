@@ -18,14 +18,15 @@ import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn, TextIO
+from typing import TYPE_CHECKING, Any, NoReturn, TextIO
 
 from checker import check_cli, render_cli
 from conformance import cli as conformance_cli
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.inputs import path_argument_problem, shown_name
-from statecharts.loader import load_spec
-from statecharts.scenario import ScenarioResult, load_scenario, run_scenario, scan_cell, scan_label, scenario_files
+
+if TYPE_CHECKING:  # the loader and the engine are imported by the commands that need them
+    from statecharts.scenario import ScenarioResult
 
 EXIT_OK = 0
 EXIT_FAIL = 1
@@ -139,6 +140,8 @@ def _missing(paths: Sequence[str]) -> list[str]:
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
+    from statecharts.loader import load_spec
+
     """Load the spec and the add-on instructions that go with it; every problem of both is reported.
 
     The add-on instructions (``spec/aoi/`` with the motion instructions they call,
@@ -211,6 +214,8 @@ def _is_program_file(path: str) -> bool:
 
 
 def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
+    from statecharts.loader import load_spec
+
     """``validate PROGRAM...``: read each program and print what it holds (docs/programs.md)."""
     from statecharts.program.reader import load_program, probe_compile, summary
 
@@ -276,6 +281,8 @@ def _print_header(scenario: Any, out: TextIO) -> None:
 
 
 def _print_row(row: Any, out: TextIO) -> None:
+    from statecharts.scenario import scan_cell, scan_label
+
     label = f"{row.step + 1}" + (f" {row.step_name}" if row.step_name else "")
     changes = "  ".join(f"{scan_label(o, f)}={scan_cell(a)}" for o, f, _b, a in row.changes) or "-"
     cu = "" if row.record.coarse_update else " (no coarse update)"
@@ -283,6 +290,8 @@ def _print_row(row: Any, out: TextIO) -> None:
 
 
 def _result_json(result: ScenarioResult) -> dict[str, object]:
+    from statecharts.scenario import scan_label
+
     return {
         "scenario": result.scenario.name,
         "file": result.scenario.file,
@@ -305,13 +314,17 @@ def _result_json(result: ScenarioResult) -> dict[str, object]:
 
 
 def _simulate(args: argparse.Namespace, out: TextIO) -> int:
+    from statecharts.loader import load_spec
+    from statecharts.scenario import load_scenario, run_scenario, scenario_files
+
     missing = _missing(args.scenarios + (args.spec or []))
     if missing:
         print(f"motionchart simulate: no such file or directory: {', '.join(missing)}", file=sys.stderr)
         return EXIT_USAGE
     files = scenario_files(args.scenarios)
     if not files:
-        print("motionchart simulate: no scenario files (*.yaml, *.yml, *.json) found", file=sys.stderr)
+        print(f"motionchart simulate: no scenario files (*.yaml, *.yml, *.json) found in "
+              f"{', '.join(shown_name(p) for p in args.scenarios)}", file=sys.stderr)
         return EXIT_USAGE
     try:
         spec = load_spec(args.spec)

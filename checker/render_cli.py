@@ -36,12 +36,17 @@ from pathlib import Path
 from typing import Any
 
 from statecharts.diagnostics import InputError
-from statecharts.inputs import path_argument_problem, shown_name
+from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
+from statecharts.outputs import replace_folder
 
 COMMANDS = ("diagram", "docs", "generate")
-FORMATS = ("dot", "svg", "png", "mermaid")
-_SUFFIX_FORMATS = {".dot": "dot", ".gv": "dot", ".svg": "svg", ".png": "png", ".mmd": "mermaid",
-                   ".mermaid": "mermaid"}
+FORMATS = ("dot", "svg", "png", "pdf", "mermaid")
+#: Output formats by file extension (``-o x.pdf``); any other extension needs ``--format``.
+SUFFIX_FORMATS = {".dot": "dot", ".gv": "dot", ".svg": "svg", ".png": "png", ".pdf": "pdf", ".mmd": "mermaid",
+                  ".mermaid": "mermaid"}
+#: Formats Graphviz draws (binary ones need ``-o FILE``).
+DRAWN = ("svg", "png", "pdf")
+BINARY = ("png", "pdf")
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 
 
@@ -53,7 +58,9 @@ def register(subparsers: Any) -> None:
     d.add_argument("chart", metavar="CHART",
                    help="chart id (e.g. AxisNonCIP), instruction mnemonic (e.g. MSO), add-on instruction id "
                         "(its flowchart) or <id>_recovery (its recovery chart)")
-    d.add_argument("--format", "-f", choices=FORMATS, help="output format (default: from -o's suffix, else dot)")
+    d.add_argument("--format", "-f", choices=FORMATS,
+                   help="output format (default: from -o's extension: .dot .gv .svg .png .pdf .mmd .mermaid; "
+                        "else dot)")
     d.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of standard output")
     d.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
 
@@ -117,16 +124,36 @@ def _os_message(exc: OSError) -> str:
     return f"cannot write {where}: {exc.strerror or exc}" if where else f"cannot write: {exc.strerror or exc}"
 
 
+def output_format(given: str | None, output: str | None) -> tuple[str, str | None]:
+    """(format, problem): ``--format`` if given, else the output file's extension, else DOT.
+
+    An extension that names no format is refused rather than guessed (``-o x.jpg``), and
+    a ``--format`` that contradicts a known extension too (``-o x.pdf --format dot``)."""
+    suffix = Path(output).suffix.lower() if output else ""
+    from_suffix = SUFFIX_FORMATS.get(suffix)
+    if given is not None:
+        fmt = given
+        if from_suffix is not None and from_suffix != given:
+            return fmt, f"--format {given} contradicts the extension of {output!r} ({from_suffix}); drop one of them"
+    elif output and suffix and from_suffix is None:
+        known = " ".join(sorted(SUFFIX_FORMATS))
+        return "dot", (f"cannot tell the format from the extension {suffix!r} of {output!r}; use one of {known} "
+                       f"or give --format {{{','.join(FORMATS)}}}")
+    else:
+        fmt = from_suffix or "dot"
+    if fmt in BINARY and not output:
+        return fmt, f"{fmt.upper()} is binary: give an output file with -o FILE.{fmt}"
+    return fmt, None
+
+
 def _diagram(args: argparse.Namespace, prog: str) -> int:
     from statecharts import ir
     from statecharts.loader import load_spec
     from statecharts.render import UnknownTarget, chart_dot, chart_mermaid, instruction_dot, instruction_mermaid, resolve
 
-    fmt = args.format
-    if fmt is None:
-        fmt = _SUFFIX_FORMATS.get(Path(args.output).suffix.lower(), "dot") if args.output else "dot"
-    if fmt == "png" and not args.output:
-        return _fail(prog, "PNG is binary: give an output file with -o FILE.png", EXIT_USAGE)
+    fmt, problem = output_format(args.format, args.output)
+    if problem:
+        return _fail(prog, problem, EXIT_USAGE)
     spec = load_spec(args.spec)
     try:
         target = resolve(spec, args.chart)
@@ -150,7 +177,7 @@ def _aoi_diagram(args: argparse.Namespace, prog: str, fmt: str, unknown: str) ->
         found = names[folded[0]] if len(folded) == 1 else None
     if found is None:
         listed = ", ".join(names) or "(none)"
-        return _fail(prog, f"{unknown}; add-on instructions: {listed}")
+        return _fail(prog, f"{unknown}; add-on instructions: {listed}", EXIT_USAGE)
     doc, kind = found
     if kind == "flowchart":
         text = aoi.aoi_flowchart_mermaid(doc) if fmt == "mermaid" else aoi.aoi_flowchart_dot(doc)
@@ -162,9 +189,9 @@ def _aoi_diagram(args: argparse.Namespace, prog: str, fmt: str, unknown: str) ->
 def _emit(args: argparse.Namespace, prog: str, fmt: str, text: str) -> int:
     from statecharts.render.graphviz_bin import render
 
-    data: bytes = render(text, fmt) if fmt in ("svg", "png") else text.encode("utf-8")
+    data: bytes = render(text, fmt) if fmt in DRAWN else text.encode("utf-8")
     if not args.output:
-        sys.stdout.write(data.decode("utf-8"))  # text formats only: PNG needs -o
+        sys.stdout.write(data.decode("utf-8"))  # text formats only: PNG and PDF need -o
         sys.stdout.flush()
         return EXIT_OK
     out = Path(args.output)
@@ -184,6 +211,9 @@ def _scenario_roots(args: argparse.Namespace) -> list[str]:
 def _check_out_dir(out: Path, prog: str) -> int | None:
     if out.exists() and not out.is_dir():
         return _fail(prog, f"{out} exists and is not a directory")
+    problem = output_path_problem(str(out), directory=True)
+    if problem is not None:  # found before the work, not after it
+        return _fail(prog, f"cannot write {shown_name(out)}: {problem}")
     return None
 
 
@@ -211,7 +241,7 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     docs = load_aoi_documents(args.spec)
     artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=False)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=False))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged); "
@@ -246,7 +276,7 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
         return EXIT_FAIL
     artefacts = build(spec, _scenario_roots(args), out, aoi=docs)
     try:
-        report = write(out, artefacts.files, prune=True)
+        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))
     except OSError as exc:
         return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged, "

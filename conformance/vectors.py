@@ -609,6 +609,7 @@ def load_vector(path: Path | str) -> dict[str, Any]:
     """Read one vector file and check it against ``vector.schema.json`` and itself;
     raise :class:`ScenarioError` with every problem, located."""
     from conformance.schemas import VECTOR_SCHEMA
+    from statecharts.inputs import read_input
     from statecharts.loader import read_yaml, schema_diagnostics
     path = Path(path)
     name = str(path)
@@ -616,22 +617,22 @@ def load_vector(path: Path | str) -> dict[str, Any]:
     def fail(message: str, line: int = 1, col: int = 1, where: str = "") -> ScenarioError:
         return ScenarioError([Diagnostic(name, line, col, where, message)])
 
-    if not path.is_file():
-        raise fail("not a regular file; expected a vector (*.json)")
-    if path.stat().st_size > MAX_VECTOR_BYTES:
-        raise fail(f"vector file larger than {MAX_VECTOR_BYTES:,} bytes")
+    read_errors: list[Diagnostic] = []
+    raw = read_input(path, read_errors, what="vector", limit=MAX_VECTOR_BYTES)
+    if raw is None:
+        raise ScenarioError(read_errors)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise fail(f"vector is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise fail(f"cannot read vector: {exc.strerror or exc}") from None
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise fail(f"JSON syntax error: {exc.msg}", exc.lineno, exc.colno) from None
     except RecursionError:
         raise fail("JSON nesting too deep to parse") from None
+    except ValueError as exc:  # an integer too long to convert
+        raise fail(f"JSON error: {exc}") from None
     problems = schema_diagnostics(name, doc, VECTOR_SCHEMA, "a vector")
     if problems:
         positioned = read_yaml(path, [], what="vector")

@@ -353,6 +353,17 @@ def bundled_aoi() -> AoiSpec:
     return load_aoi()
 
 
+def _check_sources(name: str, tree: Any, errors: list[Diagnostic], spec_dir: Path) -> None:
+    """Every ``source:`` of the file must resolve to the sources registry of its spec."""
+    from statecharts import sources
+
+    registry, problems = sources.registry_for([spec_dir / sources.SOURCES_FILE]
+                                              if (spec_dir / sources.SOURCES_FILE).is_file() else [])
+    errors.extend(problems)
+    if registry is not None:
+        errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+
+
 def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     """Load the add-on instruction and its sub-instructions; raise SpecError with every problem."""
     aoi_paths, sub_paths = aoi_files(Path(spec_dir) if spec_dir else None)
@@ -368,6 +379,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         if len(errors) > before:
             continue
         _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
+        _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
         d = plain_data(tree)["instruction"]
         sub_checks: list[SubCheck] = []
         for i, c in enumerate(d["checks"]):
@@ -440,6 +452,7 @@ def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
         if e is not None:
             on_done.append((e, o["set"]))
     _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
+    _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
     abort = d["rung_false"].get("abort_call")
     if abort is not None and abort not in mnemonics:
         errors.append(Diagnostic(f, 1, 1, "aoi.rung_false.abort_call", f"unknown sub-instruction {abort!r}"))
@@ -1338,10 +1351,28 @@ def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding
                                    f"{entry[fb.name]!r} at set-up")
 
 
+def _oversized_integers(name: str, tree: Any) -> list[Diagnostic]:
+    """Integers no Logix tag holds (beyond LINT) and no REAL can stand for: refused, located
+    (NaN and infinities stay allowed: they are inputs the add-on instruction checks)."""
+    out: list[Diagnostic] = []
+    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
+    while stack:
+        node, parts = stack.pop()
+        if isinstance(node, Mapping):
+            stack.extend((v, (*parts, k)) for k, v in node.items())
+        elif isinstance(node, list):
+            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
+        elif isinstance(node, int) and not isinstance(node, bool) and not -(2**63) <= node < 2**63:
+            line, col = locate(tree, parts)
+            out.append(Diagnostic(name, line, col, node_path(parts), "integer beyond 64 bits (the LINT range)"))
+    return out
+
+
 def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario:
     """Check an AOI scenario (already parsed) against its schema and the AOI spec."""
     name = str(path)
     errors: list[Diagnostic] = list(schema_diagnostics(name, tree, SCENARIO_SCHEMA, "an add-on instruction scenario"))
+    errors.extend(_oversized_integers(name, tree))
     if errors:
         raise ScenarioError(errors)
     doc = plain_data(tree)

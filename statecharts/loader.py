@@ -46,7 +46,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 from ruamel.yaml.tag import Tag
 
-from statecharts import ir
+from statecharts import ir, sources
 from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.expr import (
@@ -1351,16 +1351,27 @@ def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
     """Load, validate and build the specification; raise SpecError with every problem found."""
     errors: list[Diagnostic] = []
     documents: list[tuple[str, Any]] = []
-    for path in spec_files(paths):
-        # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files
-        if path.suffix == ".json" or path.parent.name in ("schema", "systems", "properties"):
+    all_paths = spec_files(paths)
+    registry, registry_errors = sources.registry_for(all_paths)
+    side: list[tuple[str, Any]] = []
+    for path in all_paths:
+        # schema/ holds JSON Schemas; systems/ and properties/ are the model checker's files,
+        # read here only for their citations (their own loaders report everything else)
+        if path.suffix == ".json":
+            continue
+        if path.parent.name in ("schema", "systems", "properties") or path.parent.parent.name == "systems":
+            if path.parent.name != "schema":
+                tree = read_yaml(path, [])
+                if tree is not None:
+                    side.append((str(path), tree))
             continue
         before = len(errors)
         tree = read_yaml(path, errors)
         if tree is None and len(errors) == before:
             errors.append(Diagnostic(str(path), 1, 1, "", f"empty file; expected a mapping with `format: {SPEC_FORMAT}`"))
         documents.append((str(path), tree if len(errors) == before else _FAILED))
-    return _build_spec(documents, errors, str(paths[0]) if paths else "spec")
+    return _build_spec(documents, errors, str(paths[0]) if paths else "spec",
+                       registry=registry, registry_errors=registry_errors, side=side)
 
 
 def load_spec_documents(documents: Mapping[str, Any]) -> ir.Spec:
@@ -1378,23 +1389,40 @@ def load_spec_documents(documents: Mapping[str, Any]) -> ir.Spec:
         problems, fatal = tree_diagnostics(name, tree)
         errors.extend(problems)
         docs.append((name, _FAILED if problems or fatal else tree))
-    return _build_spec(docs, errors, next(iter(documents), "spec"))
+    registry, registry_errors = sources.registry_for([])
+    return _build_spec(docs, errors, next(iter(documents), "spec"), registry=registry, registry_errors=registry_errors)
 
 
 _FAILED = object()  # a document that could not be read: its diagnostics are in the list already
 
 
-def _build_spec(documents: Sequence[tuple[str, Any]], read_errors: list[Diagnostic], label: str) -> ir.Spec:
+def _build_spec(
+    documents: Sequence[tuple[str, Any]], read_errors: list[Diagnostic], label: str, *,
+    registry: sources.Registry | None = None, registry_errors: Sequence[Diagnostic] = (),
+    side: Sequence[tuple[str, Any]] = (),
+) -> ir.Spec:
+    """Build from parsed documents.  ``registry`` resolves every ``source:`` (of the
+    documents and of the ``side`` files, the model checker's, checked only for their
+    citations); its own problems are ``registry_errors``."""
     schema = spec_schema()
     b = _Builder()
     b.errors.extend(read_errors)
     files: list[_File] = []
     failed_files = 0
+    source_errors: list[Diagnostic] = list(registry_errors)
+    cited_trees: list[tuple[str, Any]] = []
+    if registry is not None:
+        for name, tree in side:
+            source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+            cited_trees.append((name, tree))
     for name, tree in documents:
         before = len(b.errors)
         if tree is _FAILED or tree is None:
             failed_files += 1
             continue
+        if registry is not None and isinstance(tree, (dict, list)):
+            source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
+            cited_trees.append((name, tree))
         if _other_format(tree):
             # properties, systems... live beside the spec and have their own loaders; an
             # interpretation they cite still counts as used
@@ -1520,6 +1548,14 @@ def _build_spec(documents: Sequence[tuple[str, Any]], read_errors: list[Diagnost
         b.used_interpretations.add(interp_id)
         if interp_id not in interp_where and complete:
             b.error(f, parts, f"unknown interpretation {interp_id!r}; add it to interpretations.yaml")
+    for name, tree in cited_trees:
+        for parts, interp_id in sources.interpretation_citations(tree):
+            b.used_interpretations.add(interp_id)
+            if interp_id not in interp_where and complete:
+                line, col = locate(tree, parts)
+                b.errors.append(Diagnostic(name, line, col, node_path(parts), (
+                    f"the source cites unknown interpretation {interp_id!r}; add it to interpretations.yaml")))
+    b.errors.extend(source_errors)
     if complete:
         for interp_id, (f, parts) in interp_where.items():
             if interp_id not in b.used_interpretations:

@@ -194,10 +194,10 @@ def mutated(draw: st.DrawFn, tree: Any, *, charts: bool = False) -> tuple[Any, l
                 ids = [s.get("id") for s in chart["states"] if isinstance(s, dict)] or ["X"]
                 a, b = draw(st.sampled_from(ids)), draw(st.sampled_from(ids))
                 guard = draw(st.sampled_from(["True", "not ServoFault", "ServoFault or not ServoFault", "1 == 1"]))
-                new = [{"id": "fz1", "from": a, "to": b, "guard": guard, "priority": -9, "source": "fuzz"},
-                       {"id": "fz2", "from": b, "to": a, "guard": guard, "priority": -9, "source": "fuzz"}]
+                new = [{"id": "fz1", "from": a, "to": b, "guard": guard, "priority": -9, "source": "MC tests/fuzzing.py"},
+                       {"id": "fz2", "from": b, "to": a, "guard": guard, "priority": -9, "source": "MC tests/fuzzing.py"}]
                 if draw(st.booleans()):
-                    new = [{"id": "fz3", "from": a, "guard": guard, "priority": -9, "source": "fuzz",
+                    new = [{"id": "fz3", "from": a, "guard": guard, "priority": -9, "source": "MC tests/fuzzing.py",
                             "actions": [draw(st.sampled_from(["ServoFault = not ServoFault", "Moving = not Moving",
                                                               "TestTimer = TestTimer + 1"]))]}]
                 chart["transitions"].extend(new)

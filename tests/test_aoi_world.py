@@ -415,8 +415,8 @@ def test_world_section_errors_are_located(tmp_path: Path) -> None:
     shutil.copy(PROJECT / "spec" / "interpretations.yaml", root / "interpretations.yaml")
     f = root / "aoi" / "sync_pth_phy_ax.yaml"
     text = f.read_text(encoding="utf-8")
-    for old, new in [("fire: [axis_fault]}, {value: false, fire: [fault_reset]}], source: \"003 §2.4 1010",
-                      "fire: [axis_faults]}, {value: false, fire: [fault_reset]}], source: \"003 §2.4 1010"),
+    for old, new in [("fire: [axis_fault]}, {value: false, fire: [fault_reset]}], source: \"SYNC-RM §2.4 1010",
+                      "fire: [axis_faults]}, {value: false, fire: [fault_reset]}], source: \"SYNC-RM §2.4 1010"),
                      ("{name: direct_control, variable: DirectControlStatus,", "{name: direct_control, variable: DirectControl,"),
                      ("chart: AxisVirtual", "chart: AxisVirtually"),
                      ("{name: tracking, when: \"'Running' in active\"", "{name: tracking, when: \"'Running' in activ\""),

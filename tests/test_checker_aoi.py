@@ -127,7 +127,7 @@ def test_text_report_names_counts_and_verdict(capsys: pytest.CaptureFixture[str]
 BAD_SYSTEM = """\
 format: motionchart-aoi-system/1
 name: broken
-source: "test"
+source: "MC tests/test_checker_aoi.py"
 instance: Sync
 setup:
   handlers:
@@ -142,7 +142,7 @@ inputs:
 environment:
   Ghost: {eState: [7]}
 properties:
-  - {id: p, always: "Sync.Sts_ERR >= Sync.NoSuchField", source: "test"}
+  - {id: p, always: "Sync.Sts_ERR >= Sync.NoSuchField", source: "MC tests/test_checker_aoi.py"}
 """
 
 

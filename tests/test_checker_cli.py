@@ -42,7 +42,7 @@ properties:
     scope: tag
     instruction: MSO
     holds: "not ER"
-    source: "deliberately false"
+    source: "MC tests/test_checker_cli.py (deliberately false)"
 """
 
 

@@ -33,59 +33,59 @@ chart:
   state_attribute: S
   axis_types: [RICH_AXIS]
   initial: Run
-  source: "test"
+  source: "MC tests/t"
   variables:
-    - {name: x, type: int, initial: 0, domain: [0, 1, 2, 3], source: "t"}
-    - {name: log, type: int, initial: 0, range: [0, 100000], source: "t"}
-    - {name: go, type: bool, initial: false, source: "t"}
+    - {name: x, type: int, initial: 0, domain: [0, 1, 2, 3], source: "MC tests/t"}
+    - {name: log, type: int, initial: 0, range: [0, 100000], source: "MC tests/t"}
+    - {name: go, type: bool, initial: false, source: "MC tests/t"}
   events:
-    - {name: a, kind: environment, source: "t"}
-    - {name: b, kind: environment, source: "t"}
-    - {name: c, kind: environment, source: "t"}
-    - {name: d, kind: environment, actions: ["go = not go"], source: "t"}
-    - {name: tick, kind: clock, source: "t"}
+    - {name: a, kind: environment, source: "MC tests/t"}
+    - {name: b, kind: environment, source: "MC tests/t"}
+    - {name: c, kind: environment, source: "MC tests/t"}
+    - {name: d, kind: environment, actions: ["go = not go"], source: "MC tests/t"}
+    - {name: tick, kind: clock, source: "MC tests/t"}
   states:
     - id: Run
       kind: compound
       initial: P
-      source: "t"
+      source: "MC tests/t"
       entry: ["log = (log * 3 + 1) % 100000"]
       exit: ["log = (log * 3 + 2) % 100000"]
       states:
         - id: P
           kind: parallel
-          source: "t"
+          source: "MC tests/t"
           entry: ["log = (log * 5 + 1) % 100000"]
           states:
             - id: R1
               kind: compound
               initial: A1
-              source: "t"
+              source: "MC tests/t"
               states:
-                - {id: A1, value: 1, source: "t", entry: ["log = (log * 7 + 1) % 100000"], exit: ["log = (log * 7 + 2) % 100000"]}
-                - {id: B1, value: 2, source: "t", entry: ["log = (log * 7 + 3) % 100000"]}
-                - {id: H1, kind: history, history: shallow, source: "t"}
+                - {id: A1, value: 1, source: "MC tests/t", entry: ["log = (log * 7 + 1) % 100000"], exit: ["log = (log * 7 + 2) % 100000"]}
+                - {id: B1, value: 2, source: "MC tests/t", entry: ["log = (log * 7 + 3) % 100000"]}
+                - {id: H1, kind: history, history: shallow, source: "MC tests/t"}
             - id: R2
               kind: compound
               initial: A2
-              source: "t"
+              source: "MC tests/t"
               states:
-                - {id: A2, value: 3, source: "t", entry: ["log = (log * 11 + 1) % 100000"]}
-                - {id: B2, value: 4, source: "t", exit: ["log = (log * 11 + 5) % 100000"]}
-        - {id: Q, value: 5, source: "t", entry: ["log = (log * 13 + 1) % 100000"]}
-    - {id: Off, value: 6, source: "t", entry: ["log = (log * 17 + 1) % 100000"]}
+                - {id: A2, value: 3, source: "MC tests/t", entry: ["log = (log * 11 + 1) % 100000"]}
+                - {id: B2, value: 4, source: "MC tests/t", exit: ["log = (log * 11 + 5) % 100000"]}
+        - {id: Q, value: 5, source: "MC tests/t", entry: ["log = (log * 13 + 1) % 100000"]}
+    - {id: Off, value: 6, source: "MC tests/t", entry: ["log = (log * 17 + 1) % 100000"]}
   transitions:
-    - {id: t1, from: A1, event: a, to: B1, actions: ["x = (x + 1) % 4"], source: "t"}
-    - {id: t2, from: B1, event: a, to: A1, source: "t"}
-    - {id: t3, from: A2, event: a, to: B2, guard: "x >= 1", source: "t"}
-    - {id: t4, from: B2, event: b, to: A2, source: "t"}
-    - {id: t5, from: P, event: b, to: Q, priority: 1, source: "t"}
-    - {id: t6, from: Q, event: a, to: H1, source: "t"}
-    - {id: t7, from: Run, event: c, to: Off, source: "t"}
-    - {id: t8, from: Off, event: c, to: Run, source: "t"}
-    - {id: t9, from: Off, guard: "go", to: Q, actions: ["go = False"], source: "t"}
-    - {id: t10, from: R1, event: b, actions: ["x = (x + 2) % 4"], source: "t"}
-    - {id: t11, from: P, event: tick, to: P, guard: "x == 3", actions: ["x = 0"], source: "t"}
+    - {id: t1, from: A1, event: a, to: B1, actions: ["x = (x + 1) % 4"], source: "MC tests/t"}
+    - {id: t2, from: B1, event: a, to: A1, source: "MC tests/t"}
+    - {id: t3, from: A2, event: a, to: B2, guard: "x >= 1", source: "MC tests/t"}
+    - {id: t4, from: B2, event: b, to: A2, source: "MC tests/t"}
+    - {id: t5, from: P, event: b, to: Q, priority: 1, source: "MC tests/t"}
+    - {id: t6, from: Q, event: a, to: H1, source: "MC tests/t"}
+    - {id: t7, from: Run, event: c, to: Off, source: "MC tests/t"}
+    - {id: t8, from: Off, event: c, to: Run, source: "MC tests/t"}
+    - {id: t9, from: Off, guard: "go", to: Q, actions: ["go = False"], source: "MC tests/t"}
+    - {id: t10, from: R1, event: b, actions: ["x = (x + 2) % 4"], source: "MC tests/t"}
+    - {id: t11, from: P, event: tick, to: P, guard: "x == 3", actions: ["x = 0"], source: "MC tests/t"}
 """
 
 

@@ -70,13 +70,13 @@ def _noncip(docs: dict[str, Any]) -> dict[str, Any]:
 
 def _add_transitions(*ts: dict[str, Any]) -> Callable[[dict[str, Any]], None]:
     def edit(docs: dict[str, Any]) -> None:
-        _noncip(docs)["transitions"].extend({"source": "test", **t} for t in ts)
+        _noncip(docs)["transitions"].extend({"source": "MC tests/test_hostile.py", **t} for t in ts)
     return edit
 
 
 def _add_variable(v: dict[str, Any]) -> Callable[[dict[str, Any]], None]:
     def edit(docs: dict[str, Any]) -> None:
-        _noncip(docs)["variables"].append({"source": "test", **v})
+        _noncip(docs)["variables"].append({"source": "MC tests/test_hostile.py", **v})
     return edit
 
 
@@ -203,7 +203,7 @@ def test_integers_beyond_a_dint_are_refused(where: str) -> None:
             _noncip(docs)["states"][1]["value"] = 2**70
         else:
             _noncip(docs)["variables"].append({"name": "Big", "type": "int", "initial": 0, "range": [0, 2**80],
-                                               "source": "test"})
+                                               "source": "MC tests/test_hostile.py"})
     assert any("outside the DINT range" in e for e in _spec_errors(edit))
 
 
@@ -447,3 +447,70 @@ def test_an_atomic_write_leaves_no_temporary_file_when_interrupted(tmp_path: Pat
 
 def test_assignments_parse_once_and_are_shared() -> None:
     assert parse_assignment("X = 1") is parse_assignment("X = 1")
+
+
+def test_an_interrupted_folder_update_leaves_the_previous_folder(tmp_path: Path) -> None:
+    from statecharts.outputs import replace_folder
+    out = tmp_path / "docs"
+    out.mkdir()
+    (out / "index.md").write_text("old")
+
+    def fill(folder: Path) -> None:
+        (folder / "index.md").write_text("new")
+        (folder / "half.md.tmp").write_text("half")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        replace_folder(out, fill)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["docs"]
+    assert sorted(p.name for p in out.iterdir()) == ["index.md"] and (out / "index.md").read_text() == "old"
+
+
+def test_a_completed_folder_update_replaces_the_folder_whole(tmp_path: Path) -> None:
+    from statecharts.outputs import replace_folder
+    out = tmp_path / "docs"
+    out.mkdir()
+    (out / "index.md").write_text("old")
+    (out / "kept.txt").write_text("kept")
+    replace_folder(out, lambda folder: (folder / "index.md").write_text("new"))
+    assert (out / "index.md").read_text() == "new" and (out / "kept.txt").read_text() == "kept"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["docs"]
+
+
+def test_docs_into_an_unwritable_place_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "afile").write_text("")
+    assert main(["docs", "-o", str(tmp_path / "afile" / "docs")]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="needs /dev/zero")
+def test_vector_files_go_through_the_safe_reader(tmp_path: Path) -> None:
+    from conformance.vectors import load_vector
+    big = tmp_path / "big.json"
+    big.write_text('{"a": ' + "9" * 5000 + "}")
+    for path, fragment in (("/dev/zero", "character device"), (str(big), "JSON error")):
+        with pytest.raises(ScenarioError) as info:
+            load_vector(path)
+        assert fragment in str(info.value) and ":1:1:" in str(info.value)
+
+
+def test_check_on_an_undecided_eventless_loop_is_a_located_error(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import shutil
+
+    from ruamel.yaml import YAML
+    spec = tmp_path / "spec"
+    shutil.copytree(bundled_spec_dir(), spec, ignore=shutil.ignore_patterns("__pycache__", "*.py"))
+    chart_file = spec / "charts" / "axis_noncip.yaml"
+    yaml = YAML(typ="rt")
+    yaml.width = 10**6
+    tree = yaml.load(chart_file.read_text())
+    tree["chart"]["variables"].append({"name": "N", "type": "int", "initial": 0, "source": "MC tests/test_hostile.py"})
+    tree["chart"]["transitions"].append({"id": "count", "from": "AxisReady", "guard": "N >= 0",
+                                         "actions": ["N = N + 1"], "priority": -9, "source": "MC tests/test_hostile.py"})
+    with chart_file.open("w") as fh:
+        yaml.dump(tree, fh)
+    assert main(["check", "-q", "--spec", str(spec)]) == 1
+    err = capsys.readouterr().err
+    assert "eventless" in err and "'count'" in err and "axis_noncip.yaml" in err and "Traceback" not in err

@@ -104,6 +104,8 @@ def flow(**items: Any) -> CommentedMap:
     """A mapping written on one line (``{a: 1, b: 2}``), so its marker names its line."""
     m = CommentedMap()
     for k, v in items.items():
+        if k == "source" and isinstance(v, str):
+            v = f"MC spec/{v}"  # a resolvable citation (spec/sources.yaml) that still holds the marker
         m[k.rstrip("_")] = v  # from_ -> from
     m.fa.set_flow_style()
     return m
@@ -279,7 +281,7 @@ def test_ids_that_are_not_names(spec_dir: Path) -> None:
 def test_files_of_other_formats_are_left_alone(spec_dir: Path) -> None:
     """A model-checker file beside the spec is not a spec file, but what it cites counts."""
     def change(t: Any) -> None:
-        t["interpretations"].append(flow(id="INT-997", title="zz", confidence="I", text="zz", evidence=["zz"]))
+        t["interpretations"].append(flow(id="INT-997", title="zz", confidence="I", text="zz", evidence=["MC spec/zz"]))
 
     edit(spec_dir, INTERPRETATIONS_FILE, change)
     (spec_dir / "zz_properties.yaml").write_text(
@@ -452,7 +454,7 @@ def test_unknown_interpretation(spec_dir: Path) -> None:
 
 def test_unused_interpretation(spec_dir: Path) -> None:
     def change(t: Any) -> None:
-        t["interpretations"].append(flow(id="INT-998", title="zz", confidence="I", text="zz", evidence=["zz"]))
+        t["interpretations"].append(flow(id="INT-998", title="zz", confidence="I", text="zz", evidence=["MC spec/zz"]))
 
     path = edit(spec_dir, INTERPRETATIONS_FILE, change)
     only_error(spec_dir, path, line_of(path, "INT-998"), "INT-998 is not used")

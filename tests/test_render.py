@@ -254,7 +254,7 @@ def test_diagram_to_stdout_is_the_dot_text(spec: ir.Spec) -> None:
 
 def test_diagram_unknown_chart_lists_known_ones() -> None:
     code, out, err = run(["diagram", "NoSuchChart"])
-    assert code == 1 and out == ""
+    assert code == 2 and out == ""  # a usage error, like an unknown system in check
     assert "unknown chart 'NoSuchChart'" in err and "AxisNonCIP" in err and "MSO" in err
     assert "Traceback" not in err
 
@@ -391,7 +391,7 @@ def test_svgs_are_reused_while_their_dot_is_unchanged(spec: ir.Spec, tmp_path: P
 
 _SHUTDOWN_MSO = """format: motionchart-scenario/1
 name: MSO on a shut-down axis
-sources: ["domain-facts §4 MSO (RM002H-p79)"]
+sources: ["RM002H p79 (MSO EXERR)"]
 covers: []
 setup:
   axes:
@@ -412,7 +412,7 @@ def test_traceability_comes_from_running_the_scenarios(spec: ir.Spec, tmp_path: 
     tr = trace(spec, [root])
     (r,) = tr.runs
     assert r.path == "scenarios/shutdown_mso.yaml" and r.covers == ()
-    # MSO on an axis in Shutdown: ER with ERR 12, EXERR 12 (domain-facts §4 MSO, RM002H-p79)
+    # MSO on an axis in Shutdown: ER with ERR 12, EXERR 12 (RM002H p79)
     assert ("MSO", 12, 12) in r.errors
     assert ("AxisNonCIP", "Shutdown") in r.states
     assert [p.path for p in tr.problems] == ["scenarios/broken.yaml"]

@@ -282,7 +282,7 @@ def test_diagram_command_draws_the_aoi(doc: AoiDocument) -> None:
     code, out, err = run(["diagram", AOI_ID.lower() + "_RECOVERY", "--format", "mermaid"])  # any case
     assert (code, err) == (0, "") and out == recovery_mermaid(doc)
     code, out, err = run(["diagram", "NoSuchThing"])
-    assert code == 1 and out == "" and f"add-on instructions: {AOI_ID}, {AOI_ID}_recovery" in err
+    assert code == 2 and out == "" and f"add-on instructions: {AOI_ID}, {AOI_ID}_recovery" in err
 
 
 @pytest.mark.skipif(not HAVE_GRAPHVIZ, reason="no Graphviz program (dot / graphviz-pure) here")

@@ -8,7 +8,8 @@ ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
 EXPR = {"type": "string", "minLength": 1}
 ACTIONS = {"type": "array", "items": EXPR}
 SOURCE = {"type": "string", "minLength": 1,
-          "description": "Document and section this element comes from, e.g. '002 Execution' or 'domain-facts §4 MSO'."}
+          "description": "Citations of the registered sources (spec/sources.yaml) separated by ';', "
+                         "e.g. 'LDH-MDO Execution' or 'RM002H p79; INT-004'."}
 INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$", "description": "Id of an interpretation in interpretations.yaml."}
 CONF = {"enum": ["C", "C3", "I", "U"]}
 SCALAR = {"type": ["boolean", "integer", "number", "string"]}

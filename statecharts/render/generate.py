@@ -5,7 +5,7 @@ Pipeline position: IR + scenarios -> renderers -> **generate** -> ``generated/``
 
 Layout of the output directory::
 
-    README.md, index.md, interpretations.md, error-codes.md, traceability.md
+    README.md, index.md, interpretations.md, error-codes.md, traceability.md, sources.md
     charts/<chart>.md           instructions/<MNEMONIC>.md
     diagrams/<chart>.{dot,mmd,svg}
     flowcharts/<MNEMONIC>.{dot,mmd,svg}
@@ -32,6 +32,7 @@ from pathlib import Path
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, SpecError
 from statecharts.render import aoi as aoi_render
+from statecharts.render import sources as sources_render
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import instruction_dot
 from statecharts.render.graphviz_bin import GraphvizNotFoundError, render
@@ -44,7 +45,7 @@ from statecharts.render.traceability import Traceability, trace
 #: Sub-directories whose whole content the generator owns (stale files there are removed).
 MANAGED_DIRS = ("charts", "instructions", "diagrams", "flowcharts", "scxml", "aoi")
 #: Top-level files the generator owns.
-TOP_FILES = ("README.md", "index.md", "interpretations.md", "error-codes.md", "traceability.md")
+TOP_FILES = ("README.md", "index.md", "interpretations.md", "error-codes.md", "traceability.md", "sources.md")
 #: The command that brings ``generated/`` up to date.
 FIX_COMMAND = "make generate"
 _STAMP = "<!-- motionchart: drawn from DOT with sha256 {} -->"
@@ -76,6 +77,7 @@ def _readme() -> str:
         "change the spec, regenerate, commit both. `motionchart generate --check` fails when this directory "
         "is out of date.", "",
         "- [index.md](index.md): the reference (charts, instructions, interpretations, error codes, traceability)",
+        "- [sources.md](sources.md): every document the spec cites, with the elements citing each page or section",
         "- `diagrams/`: state diagrams as Graphviz DOT, Mermaid and SVG",
         "- `flowcharts/`: instruction flowcharts as Graphviz DOT, Mermaid and SVG (also those of the "
         "add-on instructions)",
@@ -83,6 +85,24 @@ def _readme() -> str:
         "recovery chart (`diagrams/<id>_recovery.*`), the motion instructions it calls",
         "- `scxml/`: each chart as W3C SCXML (loads with `statemachine.io.load(path, format=\"scxml\")`)", "",
     ])
+
+
+def spec_root(spec: ir.Spec) -> Path | None:
+    """The top directory of the spec that holds a ``sources.yaml`` (None: no such directory)."""
+    best: Path | None = None
+    for f in spec.files:
+        for d in Path(f).resolve().parents:
+            if (d / sources_render.S.SOURCES_FILE).is_file() and (best is None or len(d.parts) < len(best.parts)):
+                best = d
+    return best
+
+
+def sources_page(spec: ir.Spec) -> str | None:
+    """generated/sources.md for the spec's own registry, or None when it has none."""
+    root = spec_root(spec)
+    if root is None:
+        return None
+    return sources_render.generated_page(sources_render.S.registry_at(root / sources_render.S.SOURCES_FILE), root)
 
 
 def link_base(out_dir: Path, scenario_roots: Sequence[Path | str]) -> str:
@@ -150,6 +170,9 @@ def build(
     text.update(reference_pages(spec, tr, scxml=scxml, aoi_table=aoi_table, extra_uses=extra_uses))
     if readme:
         text["README.md"] = _readme()
+        page = sources_page(spec)
+        if page is not None:
+            text["sources.md"] = page
     files = {k: v.encode("utf-8") for k, v in text.items()}
     unrendered: list[str] = []
     draw = render_svg or (lambda src: render(src, "svg"))

@@ -23,7 +23,7 @@ from pathlib import Path
 #: Programs tried, in order.
 PROGRAMS = ("dot", "graphviz-pure")
 #: Output formats this module renders.
-FORMATS = ("svg", "png")
+FORMATS = ("svg", "png", "pdf")
 #: Seconds a single rendering may take before it is abandoned.
 TIMEOUT = 60
 
@@ -78,7 +78,7 @@ def available() -> bool:
 
 
 def render(source: str, fmt: str, program: str | None = None) -> bytes:
-    """Lay out DOT ``source`` and return the ``fmt`` (``svg`` or ``png``) bytes."""
+    """Lay out DOT ``source`` and return the ``fmt`` (``svg``, ``png`` or ``pdf``) bytes."""
     if fmt not in FORMATS:
         raise ValueError(f"unsupported format {fmt!r}; expected one of: {', '.join(FORMATS)}")
     prog = program or find_program()

@@ -184,3 +184,10 @@ def test_malformed_registry_is_located(spec_copy: Path) -> None:
 def test_docs_sources_page_is_current() -> None:
     page = (ROOT / "docs" / "sources.md").read_text(encoding="utf-8")
     assert page == docs_page(S.bundled_registry()), "docs/sources.md is stale: run make generate"
+
+
+def test_the_benchmark_model_cites_registered_sources() -> None:
+    """`make bench` loads benchmarks/five_state/chart.yaml beside the bundled spec."""
+    bench_chart = Path(__file__).resolve().parents[1] / "benchmarks" / "five_state" / "chart.yaml"
+    spec = load_spec([bundled_spec_dir(), bench_chart])
+    assert any(c.id != "AxisNonCIP" and len(c.states) == 5 for c in spec.charts)

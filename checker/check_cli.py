@@ -21,7 +21,8 @@ EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 DEFAULT_SYSTEM = "noncip"
 
 
-def _positive_int(text: str) -> int:
+def positive_int(text: str) -> int:
+    """An argparse type: a whole number of at least 1."""
     try:
         value = int(text)
     except ValueError:
@@ -46,7 +47,7 @@ MAX_AXES = 64
 
 
 def _axis_count(text: str) -> int:
-    value = _positive_int(text)
+    value = positive_int(text)
     if value > MAX_AXES:
         raise argparse.ArgumentTypeError(f"at most {MAX_AXES} axes per group, got {value}")
     return value
@@ -61,9 +62,9 @@ def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentPa
                    help=f"a bundled system name or a system file (default: {DEFAULT_SYSTEM}; --list-systems lists them)")
     p.add_argument("--list-systems", action="store_true", help="list the bundled systems and exit")
     p.add_argument("--axes", type=_axis_count, metavar="N", help="use N axes in every axis group of the system")
-    p.add_argument("--max-changes", type=_positive_int, metavar="N",
+    p.add_argument("--max-changes", type=positive_int, metavar="N",
                    help="add-on instruction systems: allow N input/environment changes per run (default: the system's)")
-    p.add_argument("--max-states", type=_positive_int, metavar="N", help="stop (incomplete) after N states")
+    p.add_argument("--max-states", type=positive_int, metavar="N", help="stop (incomplete) after N states")
     p.add_argument("--max-seconds", type=_positive_float, metavar="S", help="stop (incomplete) after S seconds")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--counterexamples", metavar="DIR", help="write each counterexample as a scenario file in DIR")

@@ -20,20 +20,11 @@ import sys
 from pathlib import Path
 from typing import Any, TextIO
 
+from checker.check_cli import positive_int
 from statecharts.diagnostics import InputError
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 COMMANDS = ("vectors", "conform", "adapter", "mutate")
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
 
 
 def _seconds(text: str) -> float:
@@ -71,13 +62,13 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     c.add_argument("--known-failures", metavar="FILE", help="`VECTOR-ID REASON` lines: expected failures (strict)")
     c.add_argument("--junit", metavar="FILE", help="also write JUnit XML")
     c.add_argument("--json", action="store_true", help="print one JSON object instead of the verdict lines")
-    c.add_argument("-j", "--jobs", type=_positive_int, default=1, metavar="N", help="run N adapters in parallel")
+    c.add_argument("-j", "--jobs", type=positive_int, default=1, metavar="N", help="run N adapters in parallel")
     c.add_argument("--timeout", type=_seconds, default=10.0, metavar="S", help="per-message time-out (default 10 s)")
     c.add_argument("--vector-timeout", type=_seconds, default=120.0, metavar="S",
                    help="per-vector time-out (default 120 s)")
     c.add_argument("--startup-timeout", type=_seconds, default=60.0, metavar="S",
                    help="time the adapter has to answer hello after it starts (default 60 s)")
-    c.add_argument("--max-line", type=_positive_int, default=4 * 1024 * 1024, metavar="BYTES",
+    c.add_argument("--max-line", type=positive_int, default=4 * 1024 * 1024, metavar="BYTES",
                    help="longest answer line accepted (default 4 MiB)")
     c.add_argument("--quiet", "-q", action="store_true", help="print only what is not a pass, and the summary")
 
@@ -91,7 +82,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
                                    "the reference adapter and report the fraction the vectors kill.")
     m.add_argument("--score", action="store_true", help="compute and print the mutation score")
     m.add_argument("--vectors", metavar="DIR", help="the suite (default: the bundled suite, as for conform)")
-    m.add_argument("--sample", type=_positive_int, metavar="N", help="only N mutants, spread over the kinds")
+    m.add_argument("--sample", type=positive_int, metavar="N", help="only N mutants, spread over the kinds")
     m.add_argument("--subprocess", type=int, default=3, metavar="N",
                    help="also serve N mutants through a `motionchart adapter` child process (default 3)")
     m.add_argument("--min-score", type=float, default=0.95, metavar="F", help="exit 1 below this score (default 0.95)")

@@ -38,7 +38,7 @@ def recovery():  # type: ignore[no-untyped-def]
 
 
 def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:  # type: ignore[no-untyped-def]
-    system, report = recovery
+    _system, report = recovery
     hang = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     assert hang.holds is False
     labels = {report.graph.starts[i].label for i in hang.hanging_starts}

@@ -1161,8 +1161,8 @@ class _Generator:
                 self.emit(f"P{k} = OPS[{k:d}].get((P{k}, t)) or setops({k:d}, P{k}, t)")
         j = m.tags_of_axis[i].index(k)
         if rc is True or rc is False:
-            table = f"RT{k:d}" if rc else f"RF{k:d}"
-            self.emit(f"t = {table}[P{k}]")
+            tname = f"RT{k:d}" if rc else f"RF{k:d}"
+            self.emit(f"t = {tname}[P{k}]")
             cond = "True" if rc else "False"
         else:
             self.emit(f"t = RT{k:d}[P{k}] if {rc} else RF{k:d}[P{k}]")

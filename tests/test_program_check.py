@@ -71,7 +71,10 @@ def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_pat
         write_scenario(doc, out)
         result = run_scenario(load_scenario(out, SPEC), SPEC)
         assert result.passed, [str(x) for x in result.mismatches]
-        assert any(step.get("always") == {"NEXTSTATE": 9} for step in doc["steps"]) or v.prop.kind == "eventually"
+        if v.prop.kind == "always_reachable":
+            always = doc["steps"][-1]["always"]
+            assert always["NEXTSTATE"] == 9 and always["Z_AXIS_STAT[0].ER"] is True
+            assert always["Z_axis"] == {"state": "Shutdown"}
 
 
 def test_fixed_recovery_never_hangs() -> None:
@@ -223,3 +226,13 @@ def test_the_dropped_interlock_has_a_shortest_counterexample_of_four_scans(tmp_p
     assert len(v.path) - 1 == 4
     last = report.model.describe(report.graph.states[v.path[-1]])
     assert last["Y_axis.state"] == "Starting" and last["X_axis.state"] != "Running"
+
+
+def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    system, report = recovery
+    v = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
+    doc = scenario_document(report.model, system, report.graph, v, EXAMPLES)
+    doc["sources"] = [s.replace(system.file, "examples/programs/fault_recovery.check.yaml") for s in doc["sources"]]
+    write_scenario(doc, tmp_path / "hang.yaml")
+    assert (tmp_path / "hang.yaml").read_text(encoding="utf-8") == \
+        (EXAMPLES / "fault_recovery_hang.yaml").read_text(encoding="utf-8")

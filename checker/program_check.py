@@ -507,7 +507,8 @@ class ProgramReport:
         g = self.graph
         return {
             "system": self.system.name, "file": self.system.file, "states": len(g.states),
-            "transitions": g.transitions, "seconds": round(g.seconds, 3), "complete": g.complete,
+            "transitions": g.transitions, "seconds": round(g.seconds, 3), "cpu_seconds": round(g.cpu_seconds, 3),
+            "complete": g.complete,
             "starts": len(g.starts),
             "properties": [{"name": v.prop.name, "kind": v.prop.kind,
                             "holds": v.holds, "message": v.message,
@@ -522,13 +523,14 @@ class ProgramReport:
 
     def text(self) -> str:
         g, m = self.graph, self.model
-        rate = len(g.states) / g.seconds if g.seconds > 0 else 0.0
+        rate = len(g.states) / g.cpu_seconds if g.cpu_seconds > 0 else 0.0
         lines = [f"program system: {self.system.name}  ({self.system.file})",
                  f"program: {m.program.name} ({self.system.program_file.name}), {m.rung_count} rungs, "
                  f"{len(m.axis_names)} axes, {len(m.inputs) + len(m.int_inputs)} free input(s), "
                  f"{len(m.events)} environment event(s) (at most {m.max_events} per run)",
                  f"explored: {len(g.states)} states, {g.transitions} transitions from {len(g.starts)} start(s) in "
-                 f"{g.seconds:.2f} s ({rate:,.0f} states/s)" + ("" if g.complete else f"; {g.stopped}"),
+                 f"{g.seconds:.2f} s ({g.cpu_seconds:.2f} CPU s, {rate:,.0f} states per CPU-second)"
+                 + ("" if g.complete else f"; {g.stopped}"),
                  ""]
         for v in self.verdicts:
             mark = {True: "HOLDS", False: "VIOLATED", None: "UNKNOWN"}[v.holds]

@@ -74,6 +74,8 @@ def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentPa
     p.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     p.add_argument("--no-symmetry", action="store_true", help="explore without symmetry reduction")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    from checker import spin_cli
+    spin_cli.add_check_options(p)
     return p
 
 
@@ -116,6 +118,15 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
               "(or give a system file)", file=sys.stderr)
         return EXIT_USAGE
     from checker.aoi_check import is_aoi_system
+    from checker import spin_cli
+    problem = spin_cli.usage_problem(args)
+    if problem is not None:
+        print(f"motionchart check: {problem}", file=sys.stderr)
+        return EXIT_USAGE
+    if is_aoi_system(system_path) and args.engine == "spin":
+        print(f"motionchart check: --engine spin does not apply to the add-on instruction system {args.system!r}",
+              file=sys.stderr)
+        return EXIT_USAGE
     if is_aoi_system(system_path):
         from checker import aoi_check
         unsupported = [f"--{o.replace('_', '-')}" for o in ("axes", "graphml", "properties")
@@ -149,6 +160,8 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         if problem is not None:
             print(f"motionchart check: {opt} {shown_name(path)!r}: {problem}", file=sys.stderr)
             return EXIT_USAGE
+    if args.engine == "spin":
+        return spin_cli.check(model, args, out)
     try:
         result = explore(model, max_states=args.max_states, max_seconds=args.max_seconds,
                          keep_graph=args.graphml is not None, progress=progress)

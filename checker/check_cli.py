@@ -117,8 +117,8 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
               "(or give a system file)", file=sys.stderr)
         return EXIT_USAGE
-    from checker.aoi_check import is_aoi_system
     from checker import spin_cli
+    from checker.aoi_check import is_aoi_system
     problem = spin_cli.usage_problem(args)
     if problem is not None:
         print(f"motionchart check: {problem}", file=sys.stderr)

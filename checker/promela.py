@@ -191,7 +191,7 @@ def compute_tables(model: Model, *, progress: Callable[[int], None] | None = Non
     classes: list[TableClass] = []
     for group in core.symmetric_groups:
         lead = group[0]
-        if any(core._leader[a] != lead for a in group):  # noqa: SLF001  # the core's own grouping
+        if any(core._leader[a] != lead for a in group):  # the core's own grouping
             raise ExportError("interchangeable axes with different inputs; export with symmetry off")
         for a in group:
             class_of[a] = len(classes)
@@ -200,7 +200,7 @@ def compute_tables(model: Model, *, progress: Callable[[int], None] | None = Non
         if class_of[ai] < 0:
             class_of[ai] = len(classes)
             classes.append(TableClass(ai, [ai]))
-    alphabet = [core._alphabet(ai) for ai in range(naxes)]  # noqa: SLF001  # fixed order of an axis's inputs
+    alphabet = [core._alphabet(ai) for ai in range(naxes)]  # fixed order of an axis's inputs
     local_of = [{c: k for k, c in enumerate(alphabet[tc.leader])} for tc in classes]
 
     starts, lens = core.block_start, core.block_len
@@ -257,10 +257,10 @@ def compute_tables(model: Model, *, progress: Callable[[int], None] | None = Non
             succ.append(tc.base[(mode, b)][0])
             succ.extend(r[1] for r in tc.moves[(mode, b)])
             while len(tc.busy) < len(tc.blocks):
-                tc.busy.append(bool(core._busy[tc.blocks[len(tc.busy)][0]]))  # noqa: SLF001  # queued requests or held events
+                tc.busy.append(bool(core._busy[tc.blocks[len(tc.busy)][0]]))  # queued requests or held events
             if core.has_prescan and not tc.busy[b]:
                 if b not in tc.prescan:
-                    a2, t2, pb, pg = core._block(lead, blk[0], list(blk[1:]), PRESCAN, 0, 0, None)  # noqa: SLF001  # the core's block scan
+                    a2, t2, pb, pg = core._block(lead, blk[0], list(blk[1:]), PRESCAN, 0, 0, None)  # the core's block scan
                     p2, _n = tc.number((a2, *t2))
                     tc.prescan[b] = (p2, _mask(pb, bit), _mask(pg, bit))
                 succ.append(tc.prescan[b][0])
@@ -269,13 +269,13 @@ def compute_tables(model: Model, *, progress: Callable[[int], None] | None = Non
                     seen[ci].add((nphase, s))
                     q.append((nphase, s))
         while len(tc.busy) < len(tc.blocks):
-            tc.busy.append(bool(core._busy[tc.blocks[len(tc.busy)][0]]))  # noqa: SLF001  # as above
+            tc.busy.append(bool(core._busy[tc.blocks[len(tc.busy)][0]]))  # as above
     if core.has_prescan:
         for tc in classes:  # a prescan successor of every block another block may meet
             for b in range(len(tc.blocks)):
                 if not tc.busy[b] and b not in tc.prescan:
                     blk = tc.blocks[b]
-                    a2, t2, pb, pg = core._block(tc.leader, blk[0], list(blk[1:]), PRESCAN, 0, 0, None)  # noqa: SLF001  # as above
+                    a2, t2, pb, pg = core._block(tc.leader, blk[0], list(blk[1:]), PRESCAN, 0, 0, None)  # as above
                     p2, new = tc.number((a2, *t2))
                     tc.prescan[b] = (p2, _mask(pb, bit), _mask(pg, bit))
                     if new:
@@ -288,11 +288,13 @@ def compute_tables(model: Model, *, progress: Callable[[int], None] | None = Non
 
 
 _IDENT = re.compile(r"[^A-Za-z0-9_]")
-_PROMELA_KEYWORDS = frozenset(
-    "active assert atomic bit bool break byte chan d_step D_proctype do else empty enabled eval false fi full "
-    "goto hidden if init int len mtype nempty never nfull od of pc_value printf priority proctype provided "
-    "run short skip timeout true typedef unless unsigned xr xs c_code c_decl c_expr c_state c_track "
-    "local show select trace notrace inline".split())
+_PROMELA_KEYWORDS = frozenset({
+    "active", "assert", "atomic", "bit", "bool", "break", "byte", "chan", "d_step", "D_proctype", "do", "else",
+    "empty", "enabled", "eval", "false", "fi", "full", "goto", "hidden", "if", "init", "int", "len", "mtype",
+    "nempty", "never", "nfull", "od", "of", "pc_value", "printf", "priority", "proctype", "provided", "run",
+    "short", "skip", "timeout", "true", "typedef", "unless", "unsigned", "xr", "xs", "c_code", "c_decl", "c_expr",
+    "c_state", "c_track", "local", "show", "select", "trace", "notrace", "inline",
+})
 
 
 def _ident(text: str) -> str:
@@ -394,7 +396,7 @@ def _emit(pm: PromelaModel) -> str:
     w("")
     # leaf states as mtype
     state_names: dict[tuple[str, str], str] = {}
-    for ai, axis in enumerate(model.axes):
+    for axis in model.axes:
         for s in axis.chart.leaf_states():
             key = (axis.chart.id, s.id)
             if key not in state_names:
@@ -447,7 +449,7 @@ def _emit(pm: PromelaModel) -> str:
         leaf = state_names[(model.axes[ai].chart.id, model.axes[ai].c.leaf(part[0]).id)]
         w(f"int blk_{names[ai]} = {first[ai]};")
         w(f"mtype state_{names[ai]} = {leaf};")
-    for ti, s in enumerate(model.slots):
+    for s in model.slots:
         nm = _ident(f"err_{s.tag.name}")
         while nm in used_defines:
             nm += "_"
@@ -463,7 +465,7 @@ def _emit(pm: PromelaModel) -> str:
     # C tables
     w("c_decl {")
     w("typedef unsigned long long mc_mask;")
-    w("#define MC_AT(t, i) ((t)[(i) >> %d][(i) & %d])" % (CHUNK_SHIFT, (1 << CHUNK_SHIFT) - 1))
+    w(f"#define MC_AT(t, i) ((t)[(i) >> {CHUNK_SHIFT}][(i) & {(1 << CHUNK_SHIFT) - 1}])")
     w("typedef const int *const *mc_ints; typedef const mc_mask *const *mc_masks;")
     w("typedef const unsigned short *const *mc_shorts; typedef const unsigned char *const *mc_bytes;")
     w("typedef struct {")
@@ -479,7 +481,6 @@ def _emit(pm: PromelaModel) -> str:
         lead = tc.leader
         tis = core.tis[lead]
         chart = model.axes[lead].chart
-        cparts: list[str] = []
         mch: list[int] = []
         mto: list[int] = []
         mbad: list[int] = []
@@ -517,23 +518,23 @@ def _emit(pm: PromelaModel) -> str:
         w(_table("mc_mask", f"mc{ci}_pbad", pbad, "ULL"))
         w(_table("mc_mask", f"mc{ci}_pgood", pgood, "ULL"))
         w(_table("unsigned char", f"mc{ci}_busy", [int(x) for x in tc.busy]))
-        leaf = []
+        leaves: list[int] = []
         errs: list[int] = []
         for blk in tc.blocks:
             part = core.parts.values[blk[0]]
-            leaf.append(mtype_no[state_names[(chart.id, model.axes[lead].c.leaf(part[0]).id)]])
+            leaves.append(mtype_no[state_names[(chart.id, model.axes[lead].c.leaf(part[0]).id)]])
             for j, ti in enumerate(tis):
                 fields = model.slots[ti].fields
                 vals = core.tags.values[blk[1 + j]][0]
                 v = vals[fields.index("ERR")] if "ERR" in fields else 0
                 errs.append(int(v) & 0xFF if isinstance(v, int) else 0)
-        w(_table("unsigned char", f"mc{ci}_leaf", leaf))
+        w(_table("unsigned char", f"mc{ci}_leaf", leaves))
         w(_table("unsigned char", f"mc{ci}_err", errs))
-        cparts = [str(nb), f"{{mc{ci}_base0, mc{ci}_base1}}", f"{{mc{ci}_bbad0, mc{ci}_bbad1}}",
+        fields_c = [str(nb), f"{{mc{ci}_base0, mc{ci}_base1}}", f"{{mc{ci}_bbad0, mc{ci}_bbad1}}",
                   f"{{mc{ci}_bgood0, mc{ci}_bgood1}}", f"{{mc{ci}_moff0, mc{ci}_moff1}}", f"mc{ci}_mch",
                   f"mc{ci}_mto", f"mc{ci}_mbad", f"mc{ci}_mgood", f"mc{ci}_pre", f"mc{ci}_pbad", f"mc{ci}_pgood",
                   f"mc{ci}_busy", f"mc{ci}_leaf", f"mc{ci}_err", str(len(tis))]
-        class_structs.append("{" + ", ".join(cparts) + "}")
+        class_structs.append("{" + ", ".join(fields_c) + "}")
     w("c_decl {")
     w("static const mc_class mc_classes[] = {\n  " + ",\n  ".join(class_structs) + "\n};")
     w(_array("int", "mc_class_of", pm.class_of))
@@ -543,7 +544,7 @@ def _emit(pm: PromelaModel) -> str:
         tag_first.append(n)
         n += len(core.tis[ai])
     w(_array("int", "mc_tag_first", tag_first))
-    groups = [g for g in core.symmetric_groups]
+    groups = list(core.symmetric_groups)
     gflat = [a for g in groups for a in g]
     goff = [0]
     for g in groups:
@@ -599,6 +600,12 @@ def _emit(pm: PromelaModel) -> str:
 
 
 _C_FUNCTIONS = r"""c_code {
+void wrapup(void);
+#ifndef MC_STOP_AFTER
+#define MC_STOP_AFTER 0  /* end the search once this many properties are decided (0: never) */
+#endif
+static int mc_found;
+static void mc_enough(void) { if (MC_STOP_AFTER > 0 && mc_found >= MC_STOP_AFTER) wrapup(); }
 static void mc_readout(void) {
   int a, j;
   for (a = 0; a < NAXES; a++) {
@@ -632,6 +639,7 @@ static int mc_offered(int a, int local) { return mc_find(a, mc_mode(), local) >=
 static void mc_dead_check(void);
 static void mc_step(int axis, int local) {
   int mode = mc_mode(), a, nb[NAXES];
+  mc_enough();
   mc_bad = 0; mc_good = 0;
   for (a = 0; a < NAXES; a++) {
     const mc_class *c = &mc_classes[mc_class_of[a]];
@@ -659,6 +667,7 @@ static int mc_prescan_offered(void) {
 }
 static void mc_prescan(void) {
   int a;
+  mc_enough();
   mc_bad = 0; mc_good = 0;
   for (a = 0; a < NAXES; a++) {
     const mc_class *c = &mc_classes[mc_class_of[a]];
@@ -703,7 +712,7 @@ static void mc_start(int k) {
 }
 static int mc_fire(int k) {
   if (((mc_bad | mc_good) >> k) & 1ULL) {
-    if (!mc_seen[k]) { mc_seen[k] = 1; return k + 1; }
+    if (!mc_seen[k]) { mc_seen[k] = 1; mc_found++; return k + 1; }
   }
   return 0;
 }

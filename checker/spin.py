@@ -88,11 +88,13 @@ class SpinOptions:
 
     def flags(self) -> list[str]:
         out = list(BASE_FLAGS)
-        if self.cores > 1 and self.search == "bfs":
+        if self.swarm:
+            pass  # a swarm member is a depth-first search of its own
+        elif self.cores > 1 and self.search == "bfs":
             out.append("-DBFS_PAR")
         elif self.search == "bfs":
             out.append("-DBFS")
-        if self.cores > 1 and self.search == "dfs":
+        if self.cores > 1 and self.search == "dfs" and not self.swarm:
             out.append(f"-DNCORE={self.cores}")
         if self.bitstate or self.swarm:
             out.append("-DBITSTATE")
@@ -198,7 +200,8 @@ class SpinRun:
     swarm_runs: int = 0
 
 
-def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions) -> tuple[Path, list[str], float]:
+def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions, extra_flags: list[str] | None = None
+                ) -> tuple[Path, list[str], float]:
     """Write ``model.pml``, run ``spin -a`` and compile ``pan``; (pan, flags, seconds)."""
     spin, cc = tools()
     if spin is None or cc is None:
@@ -206,7 +209,7 @@ def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions) -> tuple[Pat
     t0 = time.perf_counter()
     (workdir / "model.pml").write_text(pm.text, encoding="ascii")
     _run([spin, "-a", "model.pml"], workdir, "spin -a")
-    flags = opts.flags()
+    flags = opts.flags() + (extra_flags or [])
     vector = 16 + 6 * pm.core.naxes + len(pm.model.slots)
     if vector > 900:
         flags.append(f"-DVECTORSZ={vector + 128}")
@@ -290,7 +293,7 @@ def _result(pm: PromelaModel, st: PanStats, runs: list[tuple[int, list[tuple[str
         initial_assignment[sid] = a_index
         initial_index.append(sid)
     # properties decided in an initial state (the model checks them before its search)
-    for a_index, (state, bad, good) in enumerate(core.initial_states()):
+    for a_index, (_state, bad, good) in enumerate(core.initial_states()):
         for p in bad:
             violations.setdefault(p.name, Witness(p.name, -1, a_index, 0))
         for p in good:
@@ -375,6 +378,29 @@ def verify(model: Model, opts: SpinOptions, *, progress: Callable[[str], None] |
         else:
             say("running pan")
             st = run_pan(pan, workdir, opts, pm)
+        if opts.cores > 1 and not opts.swarm and st.trails:
+            # multi-core trails are not reliable (parallel breadth-first) or stop the
+            # search at the first error (multi-core depth-first): the counterexamples come
+            # from a single-core breadth-first run, which ends once as many properties
+            # are decided as the multi-core run decided
+            say("rebuilding the counterexamples with a single-core breadth-first search")
+            sub = workdir / "trails"
+            sub.mkdir(exist_ok=True)
+            for old in sub.glob("*.trail"):
+                old.unlink()
+            single = SpinOptions(search="bfs", memory_mb=opts.memory_mb, hash_bits=opts.hash_bits,
+                                 collapse=opts.collapse, max_seconds=opts.max_seconds)
+            decided = len({bit for bit, _t in st.trails})
+            stop = decided if opts.search == "bfs" else 0
+            pan, flags2, csec2 = compile_pan(pm, sub, single, extra_flags=[f"-DMC_STOP_AFTER={stop}"])
+            csec += csec2
+            again = run_pan(pan, sub, single, pm)
+            if opts.search == "dfs":  # the multi-core depth-first search stopped early
+                st = again
+                flags = [*flags, "(counterexamples and verdicts: " + " ".join(flags2) + ")"]
+            else:
+                st.trails = again.trails
+            workdir = sub
         runs: list[tuple[int, list[tuple[str, int, int]]]] = []
         best: dict[int, list[tuple[str, int, int]]] = {}
         for bit, trail in st.trails:

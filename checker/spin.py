@@ -339,7 +339,8 @@ def _result(pm: PromelaModel, st: PanStats, runs: list[tuple[int, list[tuple[str
         else:
             violations[prop.name] = Witness(prop.name, node, choice, depth)
     cov = core.cov
-    coverage = Coverage(set(cov.configs), set(cov.fired), set(cov.executed), set(cov.errors), set(cov.values))
+    coverage = Coverage(set(cov.configs), set(cov.fired), set(cov.executed), set(cov.errors), set(cov.values),
+                        set(cov.checks))
     import resource
 
     return SearchResult(

@@ -35,8 +35,8 @@ PROJECT = {"statecharts", "checker", "conformance", "motionchart", "motionchart_
 
 _TYPE_IGNORE = re.compile(r"#\s*type:\s*ignore(?P<codes>\[[^\]]*\])?(?P<rest>.*)$")
 _NOQA = re.compile(r"#\s*noqa(?P<codes>:\s*[A-Z]+[0-9]+(?:\s*,\s*[A-Z]+[0-9]+)*)?(?P<rest>.*)$", re.IGNORECASE)
-#: The reason: a further ``#`` comment with at least two words.
-_REASON = re.compile(r"^\s*#\s*\S+\s+\S+")
+#: The reason: a further ``#`` comment of a few characters at least.
+_REASON = re.compile(r"^\s*#\s*\w\S*(\s+\S+)*\s*$")
 
 
 def python_files(root: Path) -> Iterator[Path]:

@@ -32,12 +32,12 @@ AXES = ("X_axis", "Y_axis", "Z_axis")
 
 
 @pytest.fixture(scope="module")
-def recovery():  # type: ignore[no-untyped-def]
+def recovery():
     system = load_program_system(EXAMPLES / "fault_recovery.check.yaml", SPEC)
     return system, run_system(system, SPEC)
 
 
-def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:
     _system, report = recovery
     hang = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     assert hang.holds is False
@@ -62,7 +62,7 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
     assert errors == {("MSF", 12, 12)}
 
 
-def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:
     system, report = recovery
     for v in report.verdicts:
         assert v.holds is False
@@ -83,7 +83,7 @@ def test_fixed_recovery_never_hangs() -> None:
     assert report.exit_code == 0
 
 
-def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:
     code = main(["check", "--system", "fault_recovery", "--counterexamples", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 1
@@ -91,7 +91,7 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
 
 
-def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_program_with_a_property(capsys) -> None:
     code = main(["check", "--program", str(EXAMPLES / "fault_recovery_fixed.txt"),
                  "--property", "always_reachable: NEXTSTATE == 1"])
     # a rung file's axes are AXIS_CIP_DRIVE starting in each preset; NEXTSTATE starts at 0 and state 9
@@ -100,7 +100,7 @@ def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped
     assert "VIOLATED" in capsys.readouterr().out
 
 
-def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:
     bad = tmp_path / "bad.check.yaml"
     bad.write_text("format: motionchart-program-system/1\nprogram: %s\naxes:\n  W_axis: {type: AXIS_CIP_DRIVE}\n"
                    "properties:\n  - {kind: sometimes, expr: 'A'}\n" % (EXAMPLES / "fault_recovery.L5X"))

@@ -262,17 +262,24 @@ class ProgramModel:
         for b in self.bindings:
             self.piece_tags.append(self.piece_systems[self.axis_index[b.axis]].tags[b.tag])
         self.ROW: list[dict[tuple[int, int, bool], tuple[int, bool]]] = [{} for _ in self.bindings]
+        # rows by part: (part, queued) when the row does not execute (its axis is not read), else a
+        # dict by axis core; None while unknown.  Grown by part_id as parts are interned.
+        self.RT: list[list[Any]] = [[] for _ in self.bindings]
+        self.RF: list[list[Any]] = [[] for _ in self.bindings]
         self.OPS: list[dict[tuple[int, tuple[Any, ...]], int]] = [{} for _ in self.bindings]
         self.CO: list[dict[tuple[Any, ...], tuple[int, ...]]] = [{} for _ in self.axis_names]
         self.cov = Coverage()
         self.coverage_on = coverage
+        self._last_executed = False
         self.instructions: list[tuple[int, Instruction]] = []  # (rung, instruction) in program order
         self.rung_count = 0
         source, rung_bits = _Generator(self).generate()
         self.source = source
         namespace: dict[str, Any] = {
             "MV": self.MV, "AV": self.AV, "ROW": self.ROW, "CO": self.CO, "OPS": self.OPS,
-            "row": self.piece_row, "coarse": self.piece_coarse, "setops": self.piece_ops,
+            "row": self.piece_row, "rowc": self.piece_rowc, "coarse": self.piece_coarse, "setops": self.piece_ops,
+            **{f"RT{k}": self.RT[k] for k in range(len(self.bindings))},
+            **{f"RF{k}": self.RF[k] for k in range(len(self.bindings))},
             "COMBOS": self.combos, "wrap": wrap, "setbit": _setbit, "fault": self._fault,
             "DINT_MAX": DINT_MAX, "DINT_MIN": DINT_MIN,
         }
@@ -310,11 +317,14 @@ class ProgramModel:
             tag.restore(snap)
             obs = tag.observe()
             self.MV.append(tuple(obs[m] for m in MOTION_MEMBERS))
+            for lst in (*self.RT, *self.RF):
+                lst.append(None)
         return p
 
     def _facts(self, system: System, i: int) -> None:
         trace = system.trace or []
         system.trace = None
+        self._last_executed = any(isinstance(rec, Executed) for rec in trace)
         if not self.coverage_on:
             return
         for rec in trace:
@@ -342,6 +352,25 @@ class ProgramModel:
         system.queue = []
         out = (self.part_id(tag.snapshot(), tag), queued)
         self.ROW[k][(p, c, r)] = out
+        return out
+
+    def piece_rowc(self, k: int, p: int, c: int, r: bool, known: Any) -> tuple[int, bool]:
+        """The row of motion instruction ``k`` by part: computed once when it does not read the axis."""
+        if known is not None:
+            hit: tuple[int, bool] | None = known.get(c)
+            if hit is not None:
+                return hit
+        system = self.piece_systems[self.axis_index[self.bindings[k].axis]]
+        system.trace = []
+        out = self.piece_row(k, p, c, r)
+        executed = self._last_executed
+        table = self.RT[k] if r else self.RF[k]
+        if executed:
+            d = known if known is not None else {}
+            d[c] = out
+            table[p] = d
+        else:
+            table[p] = out
         return out
 
     def piece_ops(self, k: int, p: int, values: tuple[Any, ...]) -> int:
@@ -559,6 +588,7 @@ class _Generator:
         self.position = 0
         self.combo: tuple[Any, ...] = ()
         self.input_value: dict[int, Any] = {}
+        self.coverage: dict[str, dict[str, int]] = {}
 
     def emit(self, line: str) -> None:
         self.lines.append("    " * self.indent + line)
@@ -602,6 +632,7 @@ class _Generator:
                 if m.coverage_on:
                     self.cover(rc, "cv", rung.number)
             m.rung_count = len(routine.rungs)
+            self.flush()
             self.finish(ci)
         for r in m.program.routines:
             if r.name != m.program.main:
@@ -613,10 +644,17 @@ class _Generator:
         return "\n".join(head + self.lines + tail) + "\n", m.rung_count
 
     def cover(self, rc: Cond, acc: str, bit: int) -> None:
-        if rc is True:
-            self.emit(f"{acc} |= {1 << bit:d}")
-        elif rc is not False:
-            self.emit(f"if {rc}: {acc} |= {1 << bit:d}")
+        """Note that ``bit`` of ``acc`` is set when ``rc`` holds (emitted once per condition by :meth:`flush`)."""
+        if rc is False:
+            return
+        masks = self.coverage.setdefault(acc, {})
+        masks[str(rc)] = masks.get(str(rc), 0) | (1 << bit)
+
+    def flush(self) -> None:
+        for acc, masks in self.coverage.items():
+            for rc, mask in masks.items():
+                self.emit(f"{acc} |= {mask:d}" if rc == "True" else f"if {rc}: {acc} |= {mask:d}")
+        self.coverage = {}
 
     def finish(self, ci: int) -> None:
         m = self.m
@@ -626,13 +664,14 @@ class _Generator:
             ks = m.tags_of_axis[i]
             key = ", ".join([f"c{i}", *(f"P{k}" for k in ks), f"q{i}", "-1"])
             self.emit(f"k{i} = ({key},)")
-            self.emit(f"o{i} = CO[{i:d}].get(k{i}) or coarse({i:d}, k{i})")
+            names = ", ".join([f"C{i}", *(f"Q{k}" for k in ks)])
+            self.emit(f"{names}, = CO[{i:d}].get(k{i}) or coarse({i:d}, k{i})")
         parts_of: dict[int, str] = {}
         for i in range(m.naxes):
-            for j, k in enumerate(m.tags_of_axis[i]):
-                parts_of[k] = f"o{i}[{j + 1:d}]"
+            for k in m.tags_of_axis[i]:
+                parts_of[k] = f"Q{k}"
         slots = ", ".join(f"X{s}" for s in m.slots)
-        cores = [f"o{i}[0]" for i in range(m.naxes)]
+        cores = [f"C{i}" for i in range(m.naxes)]
         parts = [parts_of[k] for k in range(m.nmotion)]
 
         def vector(ev: str, cores: list[str], parts: list[str]) -> str:
@@ -1120,10 +1159,18 @@ class _Generator:
             if values:
                 self.emit(f"t = ({', '.join(values)},)")
                 self.emit(f"P{k} = OPS[{k:d}].get((P{k}, t)) or setops({k:d}, P{k}, t)")
-        cond = "True" if rc is True else ("False" if rc is False else rc)
-        self.emit(f"P{k}, t = ROW[{k:d}].get((P{k}, c{i}, {cond})) or row({k:d}, P{k}, c{i}, {cond})")
         j = m.tags_of_axis[i].index(k)
-        self.emit(f"if t: q{i} |= {1 << j:d}")
+        if rc is True or rc is False:
+            tname = f"RT{k:d}" if rc else f"RF{k:d}"
+            self.emit(f"t = {tname}[P{k}]")
+            cond = "True" if rc else "False"
+        else:
+            self.emit(f"t = RT{k:d}[P{k}] if {rc} else RF{k:d}[P{k}]")
+            cond = rc
+        self.emit("if t.__class__ is not tuple:")
+        self.emit(f"    t = (t and t.get(c{i})) or rowc({k:d}, P{k}, c{i}, {cond}, t)")
+        self.emit(f"P{k}, tq = t")
+        self.emit(f"if tq: q{i} |= {1 << j:d}")
         return rc
 
 

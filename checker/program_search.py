@@ -30,6 +30,7 @@ Cycles are found as strongly connected components (networkx).
 
 from __future__ import annotations
 
+import operator
 import re
 import time
 from collections import deque
@@ -119,12 +120,18 @@ def compile_predicate(model: ProgramModel, text: str, prop: ProgramProperty) -> 
             return Diagnostic(prop.file, prop.line, 1, f"property {prop.name}", f"{path}: {g}")
         getters.append((n, g))
     fn = e.fn
+    memo: dict[tuple[Any, ...], bool] = {}
+    fetch = [g for _n, g in getters]
+    keys = [n for n, _g in getters]
 
     def pred(s: State) -> bool:
-        env = dict(constants)
-        for n, g in getters:
-            env[n] = g(s)
-        return bool(fn(env))
+        values = tuple([g(s) for g in fetch])
+        hit = memo.get(values)
+        if hit is None:
+            env = dict(constants)
+            env.update(zip(keys, values))
+            hit = memo[values] = bool(fn(env))
+        return hit
     return pred
 
 
@@ -153,7 +160,10 @@ class Graph:
     complete: bool = True
     stopped: str = ""
     seconds: float = 0.0
+    cpu_seconds: float = 0.0
     transitions: int = 0
+    computed: int = 0  # transitions computed by the successor function (once per controller state)
+    controller_states: int = 0  # states without the free inputs' last values
 
     def path(self, target: int) -> list[int]:
         out = [target]
@@ -175,6 +185,7 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
     """Every state reachable from ``starts``, breadth first."""
     g = Graph(starts=list(starts))
     t0 = time.perf_counter()
+    c0 = time.process_time()
     states, index, parent, via, depth = g.states, g.index, g.parent, g.via, g.depth
     succ, quiet, start_of = g.succ, g.quiet, g.start_of
     for n, st in enumerate(starts):
@@ -193,6 +204,14 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
     cov = model.cov
     combo_index = {c: i for i, c in enumerate(model.combos)}
     input_pos = [model.slot_pos[x] for x in model.input_slots]
+    inputs_of = operator.itemgetter(*input_pos) if input_pos else (lambda _s: ())
+    # the free inputs are written before each scan: the successors of a state do not depend on
+    # the values its inputs had in the previous scan, so they are computed once per controller state
+    kept = [j for j in range(model.width) if j not in set(input_pos)]
+    controller_of = operator.itemgetter(*kept)
+    single = len(input_pos) == 1
+    memo: dict[Any, tuple[tuple[int, ...], dict[int, int]]] = {}
+    computed = 0
     rungs = executed = 0
     transitions = 0
     frontier = 0
@@ -215,29 +234,33 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
             g.complete = False
             g.stopped = f"bounded: runs explored up to {max_scans} scans (max_scans)"
             continue
-        outs, cv, ex = successors(s)
-        rungs |= cv
-        executed |= ex
-        qc = combo_index[tuple(s[p] for p in input_pos)]
-        ids = []
-        q = -1
-        src = start_of[u]
-        for choice, t in outs:
-            v = index.get(t)
-            if v is None:
-                v = len(states)
-                index[t] = v
-                states.append(t)
-                parent.append(u)
-                via.append(choice)
-                depth.append(d)
-                start_of.append(src)
-            ids.append(v)
-            if choice == qc:
-                q = v
-        transitions += len(outs)
-        succ.append(tuple(set(ids)))
-        quiet.append(q)
+        ins = inputs_of(s)
+        qc = combo_index[(ins,) if single else ins]
+        key = controller_of(s)
+        hit = memo.get(key)
+        if hit is None:
+            outs, cv, ex = successors(s)
+            rungs |= cv
+            executed |= ex
+            by_choice: dict[int, int] = {}
+            src = start_of[u]
+            for choice, t in outs:
+                v = index.get(t)
+                if v is None:
+                    v = len(states)
+                    index[t] = v
+                    states.append(t)
+                    parent.append(u)
+                    via.append(choice)
+                    depth.append(d)
+                    start_of.append(src)
+                by_choice[choice] = v
+            hit = (tuple(set(by_choice.values())), by_choice)
+            memo[key] = hit
+            computed += len(outs)
+        transitions += len(hit[1])
+        succ.append(hit[0])
+        quiet.append(hit[1][qc])
         if progress is not None and (u & 4095) == 0:
             progress(len(states), u)
     while len(succ) < len(states):
@@ -246,7 +269,10 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
     cov.rungs_true |= rungs
     cov.executed |= executed
     g.transitions = transitions
+    g.computed = computed
+    g.controller_states = len(memo)
     g.seconds = time.perf_counter() - t0
+    g.cpu_seconds = time.process_time() - c0
     return g
 
 

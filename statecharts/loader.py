@@ -91,7 +91,8 @@ STATE_KEYS = frozenset(
     {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states", "implies"}
 ) | _PROVENANCE
 TRANSITION_KEYS = frozenset({"id", "from", "to", "event", "guard", "actions", "priority"}) | _PROVENANCE
-VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description", "writable"}) | _PROVENANCE
+VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description", "writable", "values"}) | _PROVENANCE
+VALUE_KEYS = frozenset({"value", "meaning", "confidence"}) | _PROVENANCE
 EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
 INSTRUCTION_KEYS = frozenset(
     {"id", "mnemonic", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
@@ -125,6 +126,7 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "state": STATE_KEYS,
     "transition": TRANSITION_KEYS,
     "variable": VARIABLE_KEYS,
+    "value": VALUE_KEYS,
     "event": EVENT_KEYS,
     "instruction": INSTRUCTION_KEYS,
     "operand": OPERAND_KEYS,
@@ -864,11 +866,20 @@ class _Builder:
                     domain = list(range(lo, hi + 1)) if hi - lo <= 4096 else None
         if domain is not None and initial not in domain:
             self.error(f, (*parts, "initial"), f"initial value {initial!r} is not in the domain {list(domain)!r}")
+        values: list[ir.DocumentedValue] = []
+        for j, n in enumerate(v.items("values", "value") if "values" in v else ()):
+            vp = (*parts, "values", j)
+            if domain is not None and n["value"] not in domain:
+                self.error(f, (*vp, "value"), f"documented value {n['value']!r} is not in the domain {list(domain)!r}")
+            if any(x.value == n["value"] for x in values):
+                self.error(f, (*vp, "value"), f"value {n['value']!r} is documented twice")
+            values.append(ir.DocumentedValue(n["value"], str(n["meaning"]), ir.Confidence(n.get("confidence", "C")),
+                                             self.prov(f, vp, n)))
         return ir.Variable(
             name=v["name"], type=vtype, initial=initial,
             domain=tuple(domain) if domain is not None else None,
             description=str(v.get("description", "")), provenance=self.prov(f, parts, v),
-            location=self.loc(f, parts), writable=bool(v.get("writable", False)),
+            location=self.loc(f, parts), writable=bool(v.get("writable", False)), values=tuple(values),
         )
 
     def implies(self, f: _File, parts: tuple[Any, ...], given: Any, variables: Sequence[ir.Variable]) -> tuple[tuple[str, object], ...]:

@@ -173,7 +173,7 @@ def test_property_texts() -> None:
 CELL = (EXAMPLES / "three_axis_cell.txt").read_text(encoding="utf-8")
 
 
-def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
+def _cell_report(tmp_path: Path, text: str):
     (tmp_path / "cell.txt").write_text(text, encoding="utf-8")
     doc = (EXAMPLES / "interlock.check.yaml").read_text(encoding="utf-8").replace(
         "program: three_axis_cell.txt", "program: cell.txt")
@@ -182,7 +182,7 @@ def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
     return system, run_system(system, SPEC)
 
 
-def _verdicts(report) -> dict[str, bool | None]:  # type: ignore[no-untyped-def]
+def _verdicts(report) -> dict[str, bool | None]:
     return {v.prop.name: v.holds for v in report.verdicts}
 
 
@@ -228,7 +228,7 @@ def test_the_dropped_interlock_has_a_shortest_counterexample_of_four_scans(tmp_p
     assert last["Y_axis.state"] == "Starting" and last["X_axis.state"] != "Running"
 
 
-def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:
     system, report = recovery
     v = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     doc = scenario_document(report.model, system, report.graph, v, EXAMPLES)

@@ -236,7 +236,7 @@ class CompiledModel:
             i = tags.id(part)
             self._rung.append(bool(part[1]))
             pos = self._pending_pos
-            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]
+            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]  # part[0] is the operand tuple
         return i
 
     def part_id(self, ai: int, part: tuple[object, ...]) -> int:
@@ -245,10 +245,10 @@ class CompiledModel:
         if i is None:
             i = parts.id(part)
             core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
-            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
+            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]  # the last two are tuples
             self._busy.append(bool(part[-2] or part[-1]))
             cid = self.chart_of[ai]
-            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
+            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]  # part[0] is the leaf state id
             for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
                 self.cov.values.add((cid, v, x))
         return i
@@ -610,8 +610,8 @@ class CompiledModel:
         if kind == RAISE:
             ti = tis[k]
             tid = tags[k]
-            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]
-            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]
+            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]  # with kind RAISE, arg is an int
+            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]  # with kind RAISE, arg is an int
         elif kind == DROP:
             ti = tis[k]
             tid = tags[k]

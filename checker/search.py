@@ -367,13 +367,13 @@ class _Stop(Exception):
 
 def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
     where = (state, choice)
-    for c, t in facts.fired:  # type: ignore[attr-defined]
+    for c, t in facts.fired:  # type: ignore[attr-defined]  # facts of either back end
         first.setdefault(("transition", c, t), where)
-    for m, s in facts.executed:  # type: ignore[attr-defined]
+    for m, s in facts.executed:  # type: ignore[attr-defined]  # facts of either back end
         first.setdefault(("cell", m, s), where)
-    for m, e, x in facts.errors:  # type: ignore[attr-defined]
+    for m, e, x in facts.errors:  # type: ignore[attr-defined]  # facts of either back end
         first.setdefault(("error", m, e, x), where)
-    for m, c in facts.checks:  # type: ignore[attr-defined]
+    for m, c in facts.checks:  # type: ignore[attr-defined]  # facts of either back end
         first.setdefault(("check", m, c), where)
 
 

@@ -64,7 +64,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 from checker.model import Flat, Model
 from checker.properties import Property
@@ -247,7 +247,8 @@ class CompiledModel:
             i = tags.id(part)
             self._rung.append(bool(part[1]))
             pos = self._pending_pos
-            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]
+            values = cast("tuple[object, ...]", part[0])  # the member and internal values
+            self._pending.append(bool(values[pos]) if pos >= 0 else False)
         return i
 
     def part_id(self, ai: int, part: tuple[object, ...]) -> int:
@@ -256,11 +257,13 @@ class CompiledModel:
         if i is None:
             i = parts.id(part)
             core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
-            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
-            self._busy.append(bool(part[-2] or part[-1]))
+            queue = cast("tuple[int, ...]", part[-2])  # queued requests, local tag numbers
+            held = cast("tuple[str, ...]", part[-1])  # held environment events
+            self._split.append((self.cores.id(core), tuple(queue), tuple(held)))
+            self._busy.append(bool(queue or held))
             cid = self.chart_of[ai]
-            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
-            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
+            self.cov.configs.add((cid, cast("frozenset[str]", part[0])))  # the configuration
+            for v, x in zip(self.model.axes[ai].c.variables, cast("tuple[object, ...]", part[1])):  # variable values
                 self.cov.values.add((cid, v, x))
         return i
 

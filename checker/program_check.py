@@ -338,14 +338,23 @@ def replay(model: ProgramModel, graph: Graph, path: Sequence[int]) -> list[tuple
 
 
 def _observe(c: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for obj, fields in c.observe().items():
+    """What a counterexample table shows: program tags, motion tag members, each axis's state."""
+    obs = c.observe()
+    axes = set(c.system.axes)
+    motion = set(c.system.tags)
+    program: dict[str, Any] = {}
+    members: dict[str, Any] = {}
+    states: dict[str, Any] = {}
+    for obj, fields in obs.items():
+        if obj in axes:
+            states[f"{obj}.state"] = fields["state"]
+            continue
         for f, v in fields.items():
             if f == "FLAGS":
                 continue
             key = obj if f == "" else (obj + f if str(f).startswith("[") else f"{obj}.{f}")
-            out[key] = v
-    return out
+            (members if obj in motion else program)[key] = v
+    return {**program, **members, **states}
 
 
 def table(model: ProgramModel, graph: Graph, path: Sequence[int]) -> str:
@@ -420,7 +429,9 @@ def scenario_document(model: ProgramModel, system: ProgramSystem, graph: Graph, 
         steps[len(path) - 2]["expect"] = _expect(model, graph.states[last], names)
     if verdict.trap and len(verdict.trap) >= 1:
         trap_states = [graph.states[u] for u in verdict.trap]
-        constant = [n for n in names if len({_value(model, s, n) for s in trap_states}) == 1]
+        shown = [*names, *(f"{a}.state" for a in model.axis_names),
+                 *(f"{b.tag}.{m}" for b in model.bindings for m in ("DN", "ER"))]
+        constant = [n for n in dict.fromkeys(shown) if len({_value(model, s, n) for s in trap_states}) == 1]
         if constant:
             steps.append({"name": "the trap: the controller stays here whatever the environment does",
                           "scans": 20, "always": _expect(model, trap_states[0], constant)})
@@ -572,11 +583,24 @@ class ProgramReport:
 
 def _trap_summary(model: ProgramModel, graph: Graph, trap: Sequence[int]) -> list[str]:
     values = [model.describe(graph.states[u]) for u in trap]
-    keys = list(values[0])
-    fixed = [k for k in keys if len({repr(v[k]) for v in values}) == 1]
-    varying = [k for k in keys if k not in fixed]
-    interesting = [k for k in fixed if k.endswith(".state") or "." not in k or k.endswith((".DN", ".ER", ".ERR"))]
-    out = ["holds: " + "  ".join(f"{k}={_fmt(values[0][k])}" for k in interesting)]
+
+    def fixed(k: str) -> bool:
+        return len({repr(v[k]) for v in values}) == 1
+    first = values[0]
+    axes = [f"{a}={first[f'{a}.state']}" for a in model.axis_names if fixed(f"{a}.state")]
+    tags = [f"{model.slot_names[s]}={_fmt(first[model.slot_names[s]])}" for s in model.slots
+            if s not in model.input_slots and fixed(model.slot_names[s])]
+    motion = []
+    for b in model.bindings:
+        er, dn = f"{b.tag}.ER", f"{b.tag}.DN"
+        if fixed(er) and first[er]:
+            motion.append(f"{b.tag} ({b.mnemonic}, rung {b.rung}) erred {first[b.tag + '.ERR']}/{first[b.tag + '.EXERR']}")
+        elif fixed(dn) and not first[dn]:
+            motion.append(f"{b.tag} ({b.mnemonic}, rung {b.rung}) never done")
+    out = ["axes: " + ("  ".join(axes) or "-"), "tags: " + ("  ".join(tags) or "-")]
+    if motion:
+        out.append("motion: " + "; ".join(motion))
+    varying = [k for k in first if not fixed(k)]
     if varying:
         out.append("varies: " + ", ".join(varying))
     return out

@@ -32,12 +32,12 @@ AXES = ("X_axis", "Y_axis", "Z_axis")
 
 
 @pytest.fixture(scope="module")
-def recovery():  # type: ignore[no-untyped-def]
+def recovery():
     system = load_program_system(EXAMPLES / "fault_recovery.check.yaml", SPEC)
     return system, run_system(system, SPEC)
 
 
-def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:
     _system, report = recovery
     hang = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     assert hang.holds is False
@@ -64,7 +64,7 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
     assert errors == {("MSF", 12, 12)}
 
 
-def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:
     system, report = recovery
     for v in report.verdicts:
         assert v.holds is False
@@ -88,7 +88,7 @@ def test_fixed_recovery_never_hangs() -> None:
     assert report.exit_code == 0
 
 
-def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:
     code = main(["check", "--system", "fault_recovery", "--counterexamples", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 1
@@ -96,7 +96,7 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
 
 
-def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_program_with_a_property(capsys) -> None:
     code = main(["check", "--program", str(EXAMPLES / "fault_recovery_fixed.txt"),
                  "--property", "always_reachable: NEXTSTATE == 1"])
     # a rung file's axes are AXIS_CIP_DRIVE starting in each preset; NEXTSTATE starts at 0 and state 9
@@ -105,7 +105,7 @@ def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped
     assert "VIOLATED" in capsys.readouterr().out
 
 
-def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:
     bad = tmp_path / "bad.check.yaml"
     bad.write_text("format: motionchart-program-system/1\nprogram: %s\naxes:\n  W_axis: {type: AXIS_CIP_DRIVE}\n"
                    "properties:\n  - {kind: sometimes, expr: 'A'}\n" % (EXAMPLES / "fault_recovery.L5X"))
@@ -175,7 +175,7 @@ def test_property_texts() -> None:
 CELL = (EXAMPLES / "three_axis_cell.txt").read_text(encoding="utf-8")
 
 
-def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
+def _cell_report(tmp_path: Path, text: str):
     (tmp_path / "cell.txt").write_text(text, encoding="utf-8")
     doc = (EXAMPLES / "interlock.check.yaml").read_text(encoding="utf-8").replace(
         "program: three_axis_cell.txt", "program: cell.txt")
@@ -184,7 +184,7 @@ def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
     return system, run_system(system, SPEC)
 
 
-def _verdicts(report) -> dict[str, bool | None]:  # type: ignore[no-untyped-def]
+def _verdicts(report) -> dict[str, bool | None]:
     return {v.prop.name: v.holds for v in report.verdicts}
 
 
@@ -230,7 +230,7 @@ def test_the_dropped_interlock_has_a_shortest_counterexample_of_four_scans(tmp_p
     assert last["Y_axis.state"] == "Starting" and last["X_axis.state"] != "Running"
 
 
-def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:
     system, report = recovery
     v = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     doc = scenario_document(report.model, system, report.graph, v, EXAMPLES)

@@ -10,6 +10,7 @@ axis is in Shutdown, 64 - 3**3 = 37 of the 64.
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import pytest
@@ -94,6 +95,11 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert code == 1
     assert "from 37 of 64 start(s)" in out and "MSF(" in out and "erred: ERR 12, EXERR 12" in out
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
+    capsys.readouterr()
+    assert main(["check", "--system", "fault_recovery", "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["states"] == 220 and doc["complete"] and doc["properties"][0]["holds"] is False
+    assert len(doc["properties"][0]["hanging_starts"]) == 37
 
 
 def test_cli_program_with_a_property(capsys) -> None:
@@ -133,6 +139,17 @@ def _starts(draw: st.DrawFn, axes: tuple[str, ...]) -> Start:
 def test_the_compiled_scan_is_the_engine_scan(text: str, data: st.DataObject) -> None:
     """Random programs and input/event sequences: every engine scan is the checker's successor
     under the same choice (so every engine run maps onto a path of the checker)."""
+    _same_scans(text, data)
+
+
+@pytest.mark.deep
+@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(text=programs(max_rungs=14), data=st.data())
+def test_the_compiled_scan_is_the_engine_scan_deep(text: str, data: st.DataObject) -> None:
+    _same_scans(text, data)
+
+
+def _same_scans(text: str, data: st.DataObject) -> None:
     program = parse_program_text("random.txt", text, spec=SPEC, form="neutral")
     axes = tuple(t.name for t in program.axes())
     names = {t.name for t in program.tags}

@@ -275,3 +275,34 @@ def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
     v = next(v for v in report.verdicts if v.prop.name == "domain of PARTS.ACC")
     assert v.holds is False and report.model.describe(report.graph.states[v.path[-1]])["PARTS.ACC"] == 5
     assert not report.graph.complete and report.exit_code == 1
+
+
+@pytest.fixture(scope="module")
+def cell_graph():  # type: ignore[no-untyped-def]
+    from checker.program_search import explore
+    system = load_program_system(EXAMPLES / "three_axis_cell.check.yaml", SPEC)
+    model = system.model(SPEC)
+    start = system.starts()[0]
+    return model, explore(model, [start]), start
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.fixed_dictionaries({n: st.booleans() for n in ("START_PB", "STOP_PB", "RESET_PB",
+                                                                               "ENABLE_SW")}),
+                          st.sampled_from([None, "X_axis", "Y_axis", "Z_axis"])), min_size=1, max_size=15))
+def test_every_engine_run_is_a_path_of_the_explored_graph(cell_graph, run) -> None:  # type: ignore[no-untyped-def]
+    """The engine (python-statemachine axes) driven by random button presses and axis faults: after
+    every scan its state is a state of the complete exploration, reached by an edge of the graph."""
+    model, graph, start = cell_graph
+    assert graph.complete
+    engine = model.engine(start)
+    u = graph.index[model.initial(start)]
+    events = 0
+    for writes, fault in run:
+        event = (fault, "axis_fault") if fault is not None and events < model.max_events else None
+        events += event is not None
+        engine.scan(events=(event,) if event else (), **writes)
+        s = (events, *model.encode(engine.system)[1:])
+        v = graph.index[s]
+        assert v in graph.succ[u]
+        u = v

@@ -15,31 +15,16 @@ import sys
 from pathlib import Path
 from typing import Any, NoReturn, TextIO
 
+from statecharts.cli_args import EXIT_FINDING, EXIT_OK, EXIT_USAGE, input_error, positive_int, positive_seconds
 from statecharts.diagnostics import InputError
 
-EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+EXIT_VIOLATED = EXIT_FINDING
+EXIT_INCOMPLETE = 3
 DEFAULT_SYSTEM = "noncip"
 
 
-def positive_int(text: str) -> int:
-    """An argparse type: a whole number of at least 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
+#: shared with the other subcommands (statecharts.cli_args)
+_positive_float = positive_seconds
 
 
 #: Most axes ``--axes`` may put in a group (each axis multiplies the state space).
@@ -137,9 +122,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         props = load_properties(spec, args.properties)
         model = Model(spec, sysdef, props, symmetry=False if args.no_symmetry else None)
     except (InputError, ModelError) as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_VIOLATED
+        return input_error(exc)
     except (EvalError, DivergenceError, ArithmeticError, RecursionError) as exc:
         _cannot_explore(exc, props if "props" in locals() else (), spec)
         return EXIT_VIOLATED

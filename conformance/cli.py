@@ -254,15 +254,21 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
     except InputError as exc:
         return input_error(exc)
     progress = None if (args.quiet or args.json) else (lambda msg: print(f"mutate: {msg}", file=sys.stderr, flush=True))
-    explained: dict[str, str] = {}
+    explained: dict[str, dict[str, str]] = {}
     manifest = directory / "manifest.json" if directory.is_dir() else None
     if manifest is not None and manifest.is_file():
         try:
-            explained = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]["orders"]["explained"]
-        except (ValueError, KeyError, TypeError):
+            coverage = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]
+            explained = {k: dict(coverage[k]["explained"]) for k in ("orders", "refusals") if k in coverage}
+        except (ValueError, KeyError, TypeError, AttributeError):
             explained = {}
-    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
-                           explained_orders=explained)
+    try:
+        score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
+                               explained_orders=explained.get("orders", {}),
+                               explained_refusals=explained.get("refusals", {}))
+    except mutation.BaselineError as exc:
+        print(f"motionchart mutate: {exc}", file=sys.stderr)
+        return EXIT_FAIL
     if args.json:
         json.dump(score.as_dict(), out, indent=2, sort_keys=True, default=str)
         out.write("\n")

@@ -152,4 +152,7 @@ if __name__ == "__main__":
     # the ladder interpreter's figures, a separate section (benchmarks/ladder_bench.py)
     from benchmarks.ladder_bench import ladder_benchmark
     ladder_benchmark()
+    # the program checker's figures (benchmarks/program_bench.py)
+    from benchmarks.program_bench import program_benchmark
+    program_benchmark()
     raise SystemExit(code)

@@ -59,7 +59,27 @@ def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentPa
     p.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     p.add_argument("--no-symmetry", action="store_true", help="explore without symmetry reduction")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p.add_argument("--program", metavar="FILE",
+                   help="check a ladder program (.rll, .txt, .L5X) on its axes from every start "
+                        "(docs/program-checking.md); a program system file is given with --system")
+    p.add_argument("--property", action="append", metavar="KIND:TEXT",
+                   help="program systems: a property, e.g. 'invariant: not (A and B)', "
+                        "'always_reachable: NEXTSTATE == 1', 'leads_to: STATE == 9 -> NEXTSTATE == 1 within 50'")
+    p.add_argument("--max-events", type=_non_negative_int, metavar="N",
+                   help="program systems: at most N environment events per run (default: the system's)")
+    p.add_argument("--max-scans", type=positive_int, metavar="N",
+                   help="program systems: explore runs up to N scans (default: the system's, else unbounded)")
     return p
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 0, got {text!r}")
+    return value
 
 
 def dispatch(args: argparse.Namespace) -> int | None:
@@ -87,7 +107,20 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
                 print(f"motionchart check: {problem}: {shown_name(p)!r}", file=sys.stderr)
                 return EXIT_USAGE
     from checker.aoi_check import bundled_aoi_systems
-    systems = {**bundled_systems(), **bundled_aoi_systems()}
+    from checker.program_check import bundled_program_systems, is_program_system
+    systems = {**bundled_systems(), **bundled_aoi_systems(), **bundled_program_systems()}
+    program_only = ("axes", "graphml", "properties", "max_changes")
+    if getattr(args, "program", None):
+        from checker import program_check
+        if path_argument_problem(args.program) is not None or not Path(args.program).is_file():
+            print(f"motionchart check: --program: no such file {shown_name(args.program)!r}", file=sys.stderr)
+            return EXIT_USAGE
+        unsupported = [f"--{o.replace('_', '-')}" for o in program_only if getattr(args, o, None)]
+        if unsupported or args.system != DEFAULT_SYSTEM:
+            print(f"motionchart check: {', '.join(unsupported) or '--system'} cannot be combined with --program",
+                  file=sys.stderr)
+            return EXIT_USAGE
+        return program_check.run(args, None, out)
     if args.list_systems:
         for name, path in systems.items():
             out.write(f"{name}\t{path}\n")
@@ -100,6 +133,20 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
               "(or give a system file)", file=sys.stderr)
         return EXIT_USAGE
+    if is_program_system(system_path):
+        from checker import program_check
+        unsupported = [f"--{o.replace('_', '-')}" for o in program_only if getattr(args, o, None)] + (
+            ["--no-symmetry"] if args.no_symmetry else [])
+        if unsupported:
+            print(f"motionchart check: {', '.join(unsupported)} do(es) not apply to the program system "
+                  f"{args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
+        return program_check.run(args, system_path, out)
+    for opt in ("property", "max_events", "max_scans"):
+        if getattr(args, opt, None) is not None:
+            print(f"motionchart check: --{opt.replace('_', '-')} applies to program systems only, "
+                  f"not {args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
     from checker.aoi_check import is_aoi_system
     if is_aoi_system(system_path):
         from checker import aoi_check

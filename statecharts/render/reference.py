@@ -20,6 +20,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from statecharts import ir
+from statecharts.render import views
+from statecharts.render.flowchart import flowchart_part_names
 from statecharts.render.labels import spec_path, state_title, where
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
 from statecharts.render.traceability import ScenarioRun, Traceability
@@ -173,6 +175,22 @@ def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool 
         "## Diagram",
         "",
     ]
+    if views.is_split(chart):
+        parts = [n for n in views.view_names(chart) if n not in (views.WHOLE, views.OVERVIEW)]
+        links = ", ".join(f"[{n}](#{anchor('part-' + n)})" for n in parts)
+        out += [f"The chart is drawn as an overview, where each composite state of simple states is one box, "
+                f"and one diagram per composite ({links}); "
+                f"the whole chart in one diagram is [diagrams/{chart.id}.svg]({p}diagrams/{chart.id}.svg) "
+                f"(large). `motionchart diagram {chart.id} --part NAME` draws one of them.", ""]
+        ov = views.stem(chart, views.OVERVIEW)
+        out += [f"![Overview of {chart.id}]({p}diagrams/{ov}.svg)", "",
+                f"Source: [Graphviz DOT]({p}diagrams/{ov}.dot).", ""]
+        for n in parts:
+            st = views.stem(chart, n)
+            out += [f'<a id="{anchor("part-" + n)}"></a>', "", f"### {chart.state(n).name} (`{n}`)", "",
+                    f"![{n} part of {chart.id}]({p}diagrams/{st}.svg)", "",
+                    f"Source: [Graphviz DOT]({p}diagrams/{st}.dot).", ""]
+        out += ["### The whole chart", ""]
     out += _diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(chart), f"{p}diagrams/{chart.id}.mmd",
                           f"{p}diagrams/{chart.id}.dot", f"State diagram of {chart.id}")
     out += ["", "## States", ""]
@@ -267,6 +285,13 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
         "## Flowchart",
         "",
     ]
+    parts = [n for n in flowchart_part_names(spec, ins) if n != "whole"]
+    if parts:
+        out += [f"The flowchart is long, so it is also drawn in {len(parts)} parts that each fit a page; the whole "
+                f"flowchart follows them. `motionchart diagram {ins.id} --part NAME` draws one of them.", ""]
+        for part_name in parts:
+            out += [f"![{ins.id} flowchart, {part_name}]({p}flowcharts/{ins.id}.{part_name}.svg)", "",
+                    f"Source: [Graphviz DOT]({p}flowcharts/{ins.id}.{part_name}.dot).", ""]
     out += _diagram_block(f"{p}flowcharts/{ins.id}.svg", instruction_mermaid(spec, ins), f"{p}flowcharts/{ins.id}.mmd",
                           f"{p}flowcharts/{ins.id}.dot", f"Flowchart of {ins.id}")
     out += ["", "## Operands", ""]

@@ -356,8 +356,10 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
     suite.systems.append({"name": sysdef.name, "states": result.states, "transitions": result.transitions,
                           "complete": result.complete})
     if result.complete:
+        events = {"tick"} | {c.event for c in model.choices if c.kind == "event" and c.event}
+        events |= {t.instruction.request.event for t in model.tags if t.instruction.request is not None}
         suite.searched.append(_Searched(sysdef.name, frozenset(model.charts),
-                                        frozenset(t.instruction.id for t in model.tags)))
+                                        frozenset(t.instruction.id for t in model.tags), frozenset(events)))
     # order the witnesses by the kind of item, then by the universe's order of items
     rank = {kind: {it: i for i, it in enumerate(items)} for kind, items in suite.universe.items()}
     items = []
@@ -396,6 +398,7 @@ class _Searched:
     name: str
     charts: frozenset[str]
     instructions: frozenset[str]
+    events: frozenset[str]  # the events its axes can get: tick, environment events, requests
 
 
 def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment: Sequence[int],
@@ -460,19 +463,31 @@ def _explain_unseen(spec: ir.Spec, suite: Suite) -> None:
         why = (f"the exhaustive search of system{'s' if len(names) > 1 else ''} {', '.join(names)} finds no "
                f"evaluation of {iid}'s checks (at {a.stage.value if a.stage is b.stage else 'the delivery'}) where "
                f"`{a.fails_when.text}` ({first}) fails first and `{b.fails_when.text}` ({second}) fails too")
-        hint = _exclusive_states(spec, ins, a, b)
+        hint = _exclusive_states(spec, ins, a, b) or _stage_hint(a, b)
         suite.explained["orders"][item] = f"{hint}; {why}" if hint else why
     for item in suite.universe.get("refusals", []):
         if item in got.refusals or item in suite.explained["refusals"]:
             continue
         cid, tid = item.split(":", 1)
-        names = [s.name for s in suite.searched if cid in s.charts]
+        t = next(x for x in spec.chart(cid).transitions if x.id == tid)
+        # only a search in which the event can happen at all shows the guard is never false
+        names = [s.name for s in suite.searched if cid in s.charts and t.event in s.events]
         if not names:
             continue
-        t = next(x for x in spec.chart(cid).transitions if x.id == tid)
         suite.explained["refusals"][item] = (
             f"the exhaustive search of system{'s' if len(names) > 1 else ''} {', '.join(names)} never tries "
             f"transition {tid} on event {t.event} with its guard `{t.guard.text if t.guard else ''}` false")
+
+
+def _stage_hint(a: ir.Check, b: ir.Check) -> str:
+    """Why two checks of different stages rarely fail together: only at the delivery are
+    both evaluated, and a failing execute-stage check errs the call before it is queued."""
+    if a.stage is b.stage:
+        return ""
+    early = a if a.stage is ir.Stage.EXECUTE else b
+    return (f"only at the delivery are both evaluated, and a call whose {early.id} check fails at its "
+            f"execution errs there and is never delivered, so both fail only if `{early.fails_when.text}` "
+            f"became true between the execution and the delivery")
 
 
 def _exclusive_states(spec: ir.Spec, ins: ir.Instruction, a: ir.Check, b: ir.Check) -> str:

@@ -35,7 +35,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import EnvironmentEvent, Errored, Executed, ScanInputs, System
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -169,8 +169,8 @@ class Session:
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         si = ScanInputs(rungs=rungs, operands=operands, events=tuple(events), prescan=bool(inputs.get("prescan", False)))
         if self.record:
-            trace: list[object] = []
-            system.trace = trace  # type: ignore[assignment]
+            trace: list[Executed | Errored | Done] = []
+            system.trace = trace
             for axis in system.axes.values():
                 axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
             system.advance(si)
@@ -185,7 +185,7 @@ class Session:
             cid = axis.chart.id
             self.covered.states.update(f"{cid}:{s}" for s in axis.active)
 
-    def _note(self, trace: list[object]) -> None:
+    def _note(self, trace: list[Executed | Errored | Done]) -> None:
         cov = self.covered
         from conformance.witness import split_fired
         for axis in self.system.axes.values():

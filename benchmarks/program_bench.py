@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from checker.program_check import load_program_system, run_system  # noqa: E402
-from statecharts.loader import load_spec  # noqa: E402
+from checker.program_check import load_program_system, run_system
+from statecharts.loader import load_spec
 
 SYSTEM = ROOT / "examples" / "programs" / "three_axis_cell.check.yaml"
 RUNS = 3

@@ -57,7 +57,7 @@ from statecharts.program.ir import AXIS_UNTYPED, Program
 FORMAT = "motionchart-program-system/1"
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 _TOP_KEYS = ("format", "name", "description", "program", "axes", "tags", "inputs", "max_events", "max_scans",
-             "scan_ms", "properties", "sources")
+             "scan_ms", "domains", "properties", "sources")
 _AXIS_KEYS = ("type", "starts", "events")
 _PROP_KEYS = ("name", "kind", "expr", "goal", "within", "final", "description")
 
@@ -84,6 +84,8 @@ class ProgramSystem:
     max_scans: int | None = None
     scan_ms: int = 10
     properties: list[ProgramProperty] = field(default_factory=list)
+    #: declared integer domains: tag path -> (least, greatest)
+    domains: dict[str, tuple[int, int]] = field(default_factory=dict)
 
     def starts(self) -> list[Start]:
         out = []
@@ -276,9 +278,21 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
             continue
         props.append(ProgramProperty(str(pd.get("name") or f"{kind} {n}"), kind, str(pd.get("expr") or ""),
                                      str(pd.get("goal") or ""), within, str(pd.get("final") or ""), name, line))
+    domains: dict[str, tuple[int, int]] = {}
+    ddoc = doc.get("domains") or {}
+    if not isinstance(ddoc, Mapping):
+        err(("domains",), "domains: a mapping from integer tag paths to [least, greatest]")
+        ddoc = {}
+    for k, v in ddoc.items():
+        if (isinstance(v, list) and len(v) == 2 and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
+                and v[0] <= v[1]):
+            domains[str(k)] = (v[0], v[1])
+        else:
+            err(("domains", k), "a domain is [least, greatest], two integers")
     system = ProgramSystem(str(doc.get("name") or path.stem), name, program, pfile, axes,
                            [(str(k), v) for k, v in tags_doc.items()], inputs, int_inputs,
-                           count("max_events", 0) or 0, count("max_scans", None), count("scan_ms", 10) or 10, props)
+                           count("max_events", 0) or 0, count("max_scans", None), count("scan_ms", 10) or 10, props,
+                           domains)
     if errors:
         raise InputError(errors)
     return system
@@ -338,14 +352,23 @@ def replay(model: ProgramModel, graph: Graph, path: Sequence[int]) -> list[tuple
 
 
 def _observe(c: Any) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for obj, fields in c.observe().items():
+    """What a counterexample table shows: program tags, motion tag members, each axis's state."""
+    obs = c.observe()
+    axes = set(c.system.axes)
+    motion = set(c.system.tags)
+    program: dict[str, Any] = {}
+    members: dict[str, Any] = {}
+    states: dict[str, Any] = {}
+    for obj, fields in obs.items():
+        if obj in axes:
+            states[f"{obj}.state"] = fields["state"]
+            continue
         for f, v in fields.items():
             if f == "FLAGS":
                 continue
             key = obj if f == "" else (obj + f if str(f).startswith("[") else f"{obj}.{f}")
-            out[key] = v
-    return out
+            (members if obj in motion else program)[key] = v
+    return {**program, **members, **states}
 
 
 def table(model: ProgramModel, graph: Graph, path: Sequence[int]) -> str:
@@ -420,7 +443,9 @@ def scenario_document(model: ProgramModel, system: ProgramSystem, graph: Graph, 
         steps[len(path) - 2]["expect"] = _expect(model, graph.states[last], names)
     if verdict.trap and len(verdict.trap) >= 1:
         trap_states = [graph.states[u] for u in verdict.trap]
-        constant = [n for n in names if len({_value(model, s, n) for s in trap_states}) == 1]
+        shown = [*names, *(f"{a}.state" for a in model.axis_names),
+                 *(f"{b.tag}.{m}" for b in model.bindings for m in ("DN", "ER"))]
+        constant = [n for n in dict.fromkeys(shown) if len({_value(model, s, n) for s in trap_states}) == 1]
         if constant:
             steps.append({"name": "the trap: the controller stays here whatever the environment does",
                           "scans": 20, "always": _expect(model, trap_states[0], constant)})
@@ -501,7 +526,25 @@ class ProgramReport:
             "motion_errors": [{"tag": t, "instruction": mn, "rung": r, "ERR": e, "EXERR": x, "check": c}
                               for t, mn, r, e, x, c in errors],
             "motion_never_done": [b.tag for k, b in enumerate(m.bindings) if k not in cov.done],
+            "domains": self.domains(),
         }
+
+    def domains(self) -> list[str]:
+        from checker.program_model import static_domains
+        start = dict(self.system.tags)
+        inputs = {*self.model.inputs, *self.model.int_inputs}
+        out = []
+        for d in static_domains(self.model, start):
+            if d.path in inputs:
+                continue
+            if d.path in self.system.domains:
+                lo, hi = self.system.domains[d.path]
+                out.append(f"{d.path}: declared {lo}..{hi}" + ("" if d.values is not None else f" ({d.why})"))
+            elif d.values is None:
+                out.append(f"{d.text()}: declare it (domains:) or bound the search (max_scans)")
+            else:
+                out.append(d.text())
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         g = self.graph
@@ -567,16 +610,32 @@ class ProgramReport:
             "; ".join(f"{e['instruction']} {e['tag']} (rung {e['rung']}) ERR {e['ERR']}/EXERR {e['EXERR']} "
                       f"({e['check']})" for e in errs) or "none"))
         lines.append(f"  motion instructions never done: {', '.join(cov['motion_never_done']) or 'none'}")
+        lines.append("integer domains (computed from the program" + (", declared" if self.system.domains else "") + "):")
+        for d in cov["domains"]:
+            lines.append(f"  {d}")
         return "\n".join(lines) + "\n"
 
 
 def _trap_summary(model: ProgramModel, graph: Graph, trap: Sequence[int]) -> list[str]:
     values = [model.describe(graph.states[u]) for u in trap]
-    keys = list(values[0])
-    fixed = [k for k in keys if len({repr(v[k]) for v in values}) == 1]
-    varying = [k for k in keys if k not in fixed]
-    interesting = [k for k in fixed if k.endswith(".state") or "." not in k or k.endswith((".DN", ".ER", ".ERR"))]
-    out = ["holds: " + "  ".join(f"{k}={_fmt(values[0][k])}" for k in interesting)]
+
+    def fixed(k: str) -> bool:
+        return len({repr(v[k]) for v in values}) == 1
+    first = values[0]
+    axes = [f"{a}={first[f'{a}.state']}" for a in model.axis_names if fixed(f"{a}.state")]
+    tags = [f"{model.slot_names[s]}={_fmt(first[model.slot_names[s]])}" for s in model.slots
+            if s not in model.input_slots and fixed(model.slot_names[s])]
+    motion = []
+    for b in model.bindings:
+        er, dn = f"{b.tag}.ER", f"{b.tag}.DN"
+        if fixed(er) and first[er]:
+            motion.append(f"{b.tag} ({b.mnemonic}, rung {b.rung}) erred {first[b.tag + '.ERR']}/{first[b.tag + '.EXERR']}")
+        elif fixed(dn) and not first[dn]:
+            motion.append(f"{b.tag} ({b.mnemonic}, rung {b.rung}) never done")
+    out = ["axes: " + ("  ".join(axes) or "-"), "tags: " + ("  ".join(tags) or "-")]
+    if motion:
+        out.append("motion: " + "; ".join(motion))
+    varying = [k for k in first if not fixed(k)]
     if varying:
         out.append("varies: " + ", ".join(varying))
     return out
@@ -589,6 +648,9 @@ def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[Pro
     props = [*system.properties, *extra]
     if not props:
         props = [ProgramProperty("deadlock", "deadlock"), ProgramProperty("livelock", "livelock")]
+    domain_props = [ProgramProperty(f"domain of {k}", "invariant", f"{lo} <= {k} <= {hi}", file=system.file)
+                    for k, (lo, hi) in system.domains.items()]
+    props = [*domain_props, *props]
     predicates: dict[str, Any] = {}
     problems = []
     for p in props:
@@ -601,7 +663,7 @@ def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[Pro
     if problems:
         raise InputError(problems)
     graph = explore(model, system.starts(), max_states=max_states, max_scans=system.max_scans,
-                    max_seconds=max_seconds)
+                    max_seconds=max_seconds, prune=[predicates[p.expr] for p in domain_props])
     verdicts = check(model, graph, props, predicates)
     report = ProgramReport(system, model, graph, verdicts)
     if counterexamples is not None:

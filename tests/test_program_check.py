@@ -32,12 +32,12 @@ AXES = ("X_axis", "Y_axis", "Z_axis")
 
 
 @pytest.fixture(scope="module")
-def recovery():  # type: ignore[no-untyped-def]
+def recovery():
     system = load_program_system(EXAMPLES / "fault_recovery.check.yaml", SPEC)
     return system, run_system(system, SPEC)
 
 
-def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recovery) -> None:
     _system, report = recovery
     hang = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
     assert hang.holds is False
@@ -46,6 +46,8 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
                 for combo in itertools.product(CIP_STARTS, repeat=3) if "Shutdown" in combo}
     assert len(report.graph.starts) == 64
     assert labels == expected and len(labels) == 37
+    fair = next(v for v in report.verdicts if v.prop.kind == "eventually")
+    assert fair.holds is False and {report.graph.starts[i].label for i in fair.hanging_starts} == expected
     # the trap: state 9 for ever, the shut-down axis's MSF erred with 12/12, its MAFR never ran
     m, g = report.model, report.graph
     for u in hang.trap:
@@ -62,7 +64,7 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
     assert errors == {("MSF", 12, 12)}
 
 
-def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_path: Path) -> None:
     system, report = recovery
     for v in report.verdicts:
         assert v.holds is False
@@ -71,7 +73,10 @@ def test_recovery_counterexample_replays_as_a_program_scenario(recovery, tmp_pat
         write_scenario(doc, out)
         result = run_scenario(load_scenario(out, SPEC), SPEC)
         assert result.passed, [str(x) for x in result.mismatches]
-        assert any(step.get("always") == {"NEXTSTATE": 9} for step in doc["steps"]) or v.prop.kind == "eventually"
+        if v.prop.kind == "always_reachable":
+            always = doc["steps"][-1]["always"]
+            assert always["NEXTSTATE"] == 9 and always["Z_AXIS_STAT[0].ER"] is True
+            assert always["Z_axis"] == {"state": "Shutdown"}
 
 
 def test_fixed_recovery_never_hangs() -> None:
@@ -83,7 +88,7 @@ def test_fixed_recovery_never_hangs() -> None:
     assert report.exit_code == 0
 
 
-def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Path, capsys) -> None:
     code = main(["check", "--system", "fault_recovery", "--counterexamples", str(tmp_path)])
     out = capsys.readouterr().out
     assert code == 1
@@ -91,7 +96,7 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
 
 
-def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped-def]
+def test_cli_program_with_a_property(capsys) -> None:
     code = main(["check", "--program", str(EXAMPLES / "fault_recovery_fixed.txt"),
                  "--property", "always_reachable: NEXTSTATE == 1"])
     # a rung file's axes are AXIS_CIP_DRIVE starting in each preset; NEXTSTATE starts at 0 and state 9
@@ -100,7 +105,7 @@ def test_cli_program_with_a_property(capsys) -> None:  # type: ignore[no-untyped
     assert "VIOLATED" in capsys.readouterr().out
 
 
-def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+def test_bad_property_and_system_are_located_errors(tmp_path: Path, capsys) -> None:
     bad = tmp_path / "bad.check.yaml"
     bad.write_text("format: motionchart-program-system/1\nprogram: %s\naxes:\n  W_axis: {type: AXIS_CIP_DRIVE}\n"
                    "properties:\n  - {kind: sometimes, expr: 'A'}\n" % (EXAMPLES / "fault_recovery.L5X"))
@@ -170,7 +175,7 @@ def test_property_texts() -> None:
 CELL = (EXAMPLES / "three_axis_cell.txt").read_text(encoding="utf-8")
 
 
-def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
+def _cell_report(tmp_path: Path, text: str):
     (tmp_path / "cell.txt").write_text(text, encoding="utf-8")
     doc = (EXAMPLES / "interlock.check.yaml").read_text(encoding="utf-8").replace(
         "program: three_axis_cell.txt", "program: cell.txt")
@@ -179,7 +184,7 @@ def _cell_report(tmp_path: Path, text: str):  # type: ignore[no-untyped-def]
     return system, run_system(system, SPEC)
 
 
-def _verdicts(report) -> dict[str, bool | None]:  # type: ignore[no-untyped-def]
+def _verdicts(report) -> dict[str, bool | None]:
     return {v.prop.name: v.holds for v in report.verdicts}
 
 
@@ -223,3 +228,33 @@ def test_the_dropped_interlock_has_a_shortest_counterexample_of_four_scans(tmp_p
     assert len(v.path) - 1 == 4
     last = report.model.describe(report.graph.states[v.path[-1]])
     assert last["Y_axis.state"] == "Starting" and last["X_axis.state"] != "Running"
+
+
+def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_path: Path) -> None:
+    system, report = recovery
+    v = next(v for v in report.verdicts if v.prop.kind == "always_reachable")
+    doc = scenario_document(report.model, system, report.graph, v, EXAMPLES)
+    doc["sources"] = [s.replace(system.file, "examples/programs/fault_recovery.check.yaml") for s in doc["sources"]]
+    write_scenario(doc, tmp_path / "hang.yaml")
+    assert (tmp_path / "hang.yaml").read_text(encoding="utf-8") == \
+        (EXAMPLES / "fault_recovery_hang.yaml").read_text(encoding="utf-8")
+
+
+def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
+    (tmp_path / "count.txt").write_text(
+        "XIC(PART)ONS(PART_ONS)CTU(PARTS,3,0);\nXIC(PARTS.DN)XIC(ACK)RES(PARTS);\n"
+        "XIC(ACK)TON(T1,25,0);\nXIC(PART)MOV(7,CODE);\nXIC(ACK)MOV(CODE,LAST);\n", encoding="utf-8")
+    (tmp_path / "count.check.yaml").write_text(
+        "format: motionchart-program-system/1\nprogram: count.txt\ndomains: {PARTS.ACC: [0, 4]}\n"
+        "properties:\n  - {name: reset, kind: always_reachable, expr: 'PARTS.ACC == 0'}\n", encoding="utf-8")
+    system = load_program_system(tmp_path / "count.check.yaml", SPEC)
+    report = run_system(system, SPEC)
+    domains = report.domains()
+    # by hand: a 25 ms timer counted in 10 ms scans takes 0, 10, 20, 30; CODE is 0 or 7 and LAST copies it
+    assert "T1.ACC: {0, 10, 20, 30} (counted in scans of 10 ms up to the preset 25)" in domains
+    assert "CODE: {0, 7}" in domains and "LAST: {0, 7}" in domains
+    assert "PARTS.ACC: declared 0..4 (CTU in rung 0)" in domains
+    # five presses without ACK take the counter to 5: the declared domain is left, the search stops there
+    v = next(v for v in report.verdicts if v.prop.name == "domain of PARTS.ACC")
+    assert v.holds is False and report.model.describe(report.graph.states[v.path[-1]])["PARTS.ACC"] == 5
+    assert not report.graph.complete and report.exit_code == 1

@@ -489,7 +489,7 @@ def test_every_interpretation_page_entry_names_its_users(spec: ir.Spec) -> None:
 
 @pytest.mark.parametrize("module", [statecharts.api, statecharts.render])
 def test_module_examples_run(module: object) -> None:
-    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)  # type: ignore[arg-type]
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 

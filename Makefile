@@ -68,6 +68,7 @@ generate: install
 # Checker speed against a hand-written reference BFS (prints figures; not a test).
 bench: install
 	@$(BIN)/python benchmarks/bench.py
+	@$(BIN)/python benchmarks/spin_bench.py
 	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
 	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors
 

@@ -330,16 +330,24 @@ def _array(ctype: str, name: str, values: Sequence[int], suffix: str = "") -> st
 CHUNK_SHIFT = 11
 
 
+def _zero_name(ctype: str) -> str:
+    return "mc_zero_" + ctype.replace(" ", "_")
+
+
 def _table(ctype: str, name: str, values: Sequence[int], suffix: str = "") -> str:
     """A large constant table as ``c_decl`` blocks of one chunk each, and ``name``, the
-    array of its chunks (read with ``MC_AT(name, i)``)."""
+    array of its chunks (read with ``MC_AT(name, i)``); chunks of zeros share one."""
     size = 1 << CHUNK_SHIFT
     blocks = []
     chunks = []
     for k in range(0, max(len(values), 1), size):
+        part = values[k:k + size]
+        if not any(part):
+            chunks.append(_zero_name(ctype))
+            continue
         cname = f"{name}_{k >> CHUNK_SHIFT}"
         chunks.append(cname)
-        blocks.append("c_decl {\n" + _array(ctype, cname, values[k:k + size], suffix) + "\n}")
+        blocks.append("c_decl {\n" + _array(ctype, cname, part, suffix) + "\n}")
     blocks.append("c_decl {\nstatic const " + ctype + " *const " + name + "[] = {" + ", ".join(chunks) + "};\n}")
     return "\n".join(blocks)
 
@@ -441,13 +449,15 @@ def _emit(pm: PromelaModel) -> str:
     w("   blocks (functions of them, so they add no states) */")
     first = pm.initials[0][0]
     w("byte phase = 0;")
+    most = max(len(tc.blocks) for tc in pm.classes)
+    ptype, ctype = ("byte", "uchar") if most <= 255 else ("short", "short") if most <= 32767 else ("int", "int")
     tag_vars = []
     for ai in range(naxes):
         tc = pm.classes[pm.class_of[ai]]
         blk = tc.blocks[first[ai]]
         part = core.parts.values[blk[0]]
         leaf = state_names[(model.axes[ai].chart.id, model.axes[ai].c.leaf(part[0]).id)]
-        w(f"int blk_{names[ai]} = {first[ai]};")
+        w(f"{ptype} blk_{names[ai]} = {first[ai]};")
         w(f"mtype state_{names[ai]} = {leaf};")
     for s in model.slots:
         nm = _ident(f"err_{s.tag.name}")
@@ -474,6 +484,8 @@ def _emit(pm: PromelaModel) -> str:
     w("  mc_ints pre; mc_masks pbad; mc_masks pgood; mc_bytes busy;")
     w("  mc_bytes leaf; mc_bytes err; int ntags;")
     w("} mc_class;")
+    for zt in ("int", "mc_mask", "unsigned short", "unsigned char"):
+        w(f"static const {zt} {_zero_name(zt)}[{1 << CHUNK_SHIFT}];")
     w("}")
     class_structs = []
     for ci, tc in enumerate(pm.classes):
@@ -562,7 +574,7 @@ def _emit(pm: PromelaModel) -> str:
     w("}")
     w("")
     w("c_code {")
-    w("static int *mc_blk[NAXES] = {" + ", ".join(f"&now.blk_{nm}" for nm in names) + "};")
+    w(f"static {ctype} *mc_blk[NAXES] = {{" + ", ".join(f"&now.blk_{nm}" for nm in names) + "};")
     w("static uchar *mc_state[NAXES] = {" + ", ".join(f"&now.state_{nm}" for nm in names) + "};")
     w("static uchar *mc_err[" + str(max(ntags, 1)) + "] = {" + (", ".join(f"&now.{nm}" for nm in tag_vars) or "0") + "};")
     w("}")

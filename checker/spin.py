@@ -50,7 +50,7 @@ from checker.promela import PromelaModel, build
 from checker.search import Coverage, SearchResult, Witness
 
 #: the compiler flags of every build (one process, safety properties only)
-BASE_FLAGS = ("-O2", "-w", "-DSAFETY", "-DNOREDUCE", "-DNOFAIR")
+BASE_FLAGS = ("-O2", "-w", "-DSAFETY", "-DNOREDUCE", "-DNOFAIR", "-DNOBOUNDCHECK")
 
 
 class SpinError(RuntimeError):
@@ -113,6 +113,8 @@ class PanStats:
     depth: int = 0
     errors: int = 0
     seconds: float = 0.0
+    #: CPU seconds of pan and its worker processes (user + system)
+    cpu_seconds: float = 0.0
     memory_mb: float = 0.0
     complete: bool = True
     stop_reason: str | None = None
@@ -230,8 +232,13 @@ def run_pan(pan: Path, workdir: Path, opts: SpinOptions, pm: PromelaModel, extra
     if opts.max_seconds is not None:
         args.append(f"-Q{max(1, math.ceil(opts.max_seconds / 60))}")
     args += extra or []
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = _run(args, workdir, "pan", timeout=None if opts.max_seconds is None else opts.max_seconds + 30)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     st = parse_pan(out, workdir)
+    st.cpu_seconds = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
     if re.search(r"pan: (?:elapsed|rate)", out) is None and st.states == 0:
         tail = "\n".join(out.strip().splitlines()[-12:])
         raise SpinError(f"pan did not report a result:\n{tail}")

@@ -32,13 +32,13 @@ from typing import Any
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from checker import spin  # noqa: E402
-from checker.model import Model  # noqa: E402
-from checker.properties import load_properties  # noqa: E402
-from checker.search import explore  # noqa: E402
-from checker.system import SystemDef, bundled_systems, load_system  # noqa: E402
-from statecharts import ir  # noqa: E402
-from statecharts.loader import bundled_spec_dir, load_spec  # noqa: E402
+from checker import spin
+from checker.model import Model
+from checker.properties import load_properties
+from checker.search import explore
+from checker.system import SystemDef, bundled_systems, load_system
+from statecharts import ir
+from statecharts.loader import bundled_spec_dir, load_spec
 
 FIVE = ROOT / "benchmarks" / "five_state"
 LIMIT = 60.0

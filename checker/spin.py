@@ -209,13 +209,18 @@ def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions, extra_flags:
     if spin is None or cc is None:
         raise SpinError(missing_tools() or "SPIN is missing")
     t0 = time.perf_counter()
-    (workdir / "model.pml").write_text(pm.text, encoding="ascii")
+    (workdir / "model.pml").write_text(pm.text.replace("TABLES.", "model_tables."), encoding="ascii")
+    objects: list[str] = []
+    if pm.tables is not None:
+        (workdir / "model_tables.c").write_text(pm.tables, encoding="ascii")
+        _run([cc, "-c", "-O0", "-w", "-o", "model_tables.o", "model_tables.c"], workdir, "the C compiler (tables)")
+        objects.append("model_tables.o")
     _run([spin, "-a", "model.pml"], workdir, "spin -a")
     flags = opts.flags() + (extra_flags or [])
     vector = 16 + 6 * pm.core.naxes + len(pm.model.slots)
     if vector > 900:
         flags.append(f"-DVECTORSZ={vector + 128}")
-    _run([cc, *flags, "-o", "pan", "pan.c"], workdir, "the C compiler")
+    _run([cc, *flags, "-o", "pan", "pan.c", *objects], workdir, "the C compiler")
     return workdir / "pan", flags, time.perf_counter() - t0
 
 

@@ -127,7 +127,7 @@ _STORED = re.compile(r"^\s*(\d+) states, stored", re.M)
 _TRANS = re.compile(r"^\s*(\d+) transitions \(= ", re.M)
 _DEPTH = re.compile(r"depth reached (\d+)")
 _ERRORS = re.compile(r"errors: (\d+)")
-_ELAPSED = re.compile(r"pan: elapsed time ([0-9.e+]+) seconds")
+_ELAPSED = re.compile(r"elapsed time ([0-9.e+]+) seconds")
 _MEMORY = re.compile(r"^\s*([0-9.]+)\s+total actual memory usage", re.M)
 _ASSERT = re.compile(r"pan:\d+: assertion violated \(viol ?!= ?(\d+)\)")
 _WROTE = re.compile(r"pan: wrote (\S+\.trail)")
@@ -145,7 +145,7 @@ def parse_pan(text: str, workdir: Path) -> PanStats:
     errs = [int(x) for x in _ERRORS.findall(text)]
     st.errors = max(errs) if errs else 0
     el = _ELAPSED.findall(text)
-    st.seconds = float(el[-1]) if el else 0.0
+    st.seconds = max(float(x) for x in el) if el else 0.0
     mem = _MEMORY.findall(text)
     st.memory_mb = float(mem[-1]) if mem else 0.0
     pending: list[int] = []
@@ -244,7 +244,7 @@ def run_pan(pan: Path, workdir: Path, opts: SpinOptions, pm: PromelaModel, extra
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     st = parse_pan(out, workdir)
     st.cpu_seconds = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    if re.search(r"pan: (?:elapsed|rate)", out) is None and st.states == 0:
+    if re.search(r"elapsed time|pan: rate", out) is None and st.states == 0:
         tail = "\n".join(out.strip().splitlines()[-12:])
         raise SpinError(f"pan did not report a result:\n{tail}")
     if opts.bitstate or opts.swarm:

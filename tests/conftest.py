@@ -74,7 +74,7 @@ def pytest_testnodedown(node: Any, error: object) -> None:
 def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> None:
     reported = [-n for n in _DESELECTED if n < 0]
     if reported and max(reported):
-        terminalreporter.write_line(f"{max(reported)} deselected (marked deep: `make deep` runs them)")
+        terminalreporter.write_line(f"{max(reported)} deselected (`make deep` runs those marked deep)")
 
 
 def sampled(values: Iterable[Any], fast: Container[Any]) -> list[Any]:

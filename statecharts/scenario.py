@@ -196,7 +196,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
         # an AoiScenario stands in for a Scenario (run_scenario hands it to the AOI runner)
-        return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]
+        return aoi.load_aoi_scenario(path, tree, aoi.for_spec(spec))  # type: ignore[return-value]
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
@@ -525,7 +525,7 @@ def run_scenario(
                 on_row(row)
         return program_result
     if isinstance(scenario, aoi.AoiScenario):
-        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
+        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.for_spec(spec))
         if on_row is not None:
             for row in result.rows:
                 on_row(row)

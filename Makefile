@@ -74,9 +74,10 @@ deep: install
 	  --vectors .deep/vectors -q --known-failures examples/adapters/node/known-failures.txt; \
 	  else echo "node not found: the JavaScript example implementation is not run"; fi
 
-# ruff (rules in pyproject.toml) and mypy --strict (statecharts/, checker/, conformance/, motionchart/); fails on
-# any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
-# sources with planted defects).
+# ruff (rules in pyproject.toml), mypy --strict (statecharts/, checker/, conformance/, motionchart/)
+# and the project's own rules (tools/lint_rules.py: a reason for every `type: ignore` and
+# `noqa`, no private names used across modules); fails on any finding. lint-run is the
+# checks alone (tests/test_lint.py runs it on a copy of the sources with planted defects).
 lint: install
 	@$(MAKE) --no-print-directory lint-run
 
@@ -84,6 +85,7 @@ lint-run:
 	@status=0; \
 	$(BIN)/python -m ruff check --no-cache . || status=1; \
 	$(BIN)/python -m mypy || status=1; \
+	$(BIN)/python tools/lint_rules.py . || status=1; \
 	exit $$status
 
 clean:

@@ -260,7 +260,9 @@ def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
             used = r["instructions"]
             assert isinstance(used, dict)
             out.write("  instructions: " + ", ".join(f"{m} x{k}" for m, k in used.items()) + "\n")
-            for w in r["warnings"]:  # type: ignore[attr-defined]
+            warnings = r["warnings"]
+            assert isinstance(warnings, list)
+            for w in warnings:
                 out.write(f"  note: {w}\n")
     for d in problems:
         print(d, file=sys.stderr)

@@ -93,6 +93,12 @@ class CoreCoverage:
     executed: set[tuple[str, str]] = field(default_factory=set)
     errors: set[tuple[str, int, int]] = field(default_factory=set)
     values: set[tuple[str, str, object]] = field(default_factory=set)
+    #: (instruction, check id) of every check or abort that failed first in some step
+    checks: set[tuple[str, str]] = field(default_factory=set)
+    #: every coverage item -> ``(state, choice)`` of the step that first showed it (the
+    #: state being expanded, :attr:`CompiledModel.current`, when the piece was computed);
+    #: items as :attr:`checker.search.Coverage.first` writes them
+    first: dict[tuple[object, ...], tuple[int, int]] = field(default_factory=dict)
 
 
 class Intern:
@@ -131,6 +137,10 @@ class CompiledModel:
         self.parts = Intern()  # abstract axis parts, as Model.extract writes them
         self.tags = Intern()  # tag parts (values, rung, operands, monitors)
         self.cov = CoreCoverage()
+        #: number of the state being expanded (set by the search; coverage witnesses)
+        self.current = -1
+        #: (state, choice) a newly computed piece's coverage facts are credited to
+        self.where: tuple[int, int] = (-1, -1)
         self.tis: list[tuple[int, ...]] = [tuple(t) for t in model.tags_of_axis]
         self.chart_of = [a.chart.id for a in model.axes]
         fields = model.slots[0].fields if model.slots else ()
@@ -226,7 +236,7 @@ class CompiledModel:
             i = tags.id(part)
             self._rung.append(bool(part[1]))
             pos = self._pending_pos
-            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]
+            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]  # part[0] is the operand tuple
         return i
 
     def part_id(self, ai: int, part: tuple[object, ...]) -> int:
@@ -235,10 +245,10 @@ class CompiledModel:
         if i is None:
             i = parts.id(part)
             core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
-            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
+            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]  # the last two are tuples
             self._busy.append(bool(part[-2] or part[-1]))
             cid = self.chart_of[ai]
-            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
+            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]  # part[0] is the leaf state id
             for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
                 self.cov.values.add((cid, v, x))
         return i
@@ -344,16 +354,26 @@ class CompiledModel:
         self.system.trace = self.model.trace
 
     def _facts(self, ai: int) -> None:
-        """Record the coverage facts of the piece that just ran."""
+        """Record the coverage facts of the piece that just ran, each credited to the
+        step being computed (:attr:`where`) if no earlier step showed it."""
         cov = self.cov
+        first = cov.first
+        where = self.where
         cid = self.chart_of[ai]
         for t in self.model.fired[ai]:
             cov.fired.add((cid, t))
+            first.setdefault(("transition", cid, t), where)
         for rec in self.model.trace:
             if type(rec) is Executed:
-                cov.executed.add((self.system.tags[rec.tag].instruction.id, rec.axis_state))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                cov.executed.add((mnemonic, rec.axis_state))
+                first.setdefault(("cell", mnemonic, rec.axis_state), where)
             elif type(rec) is Errored:
-                cov.errors.add((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                cov.errors.add((mnemonic, rec.err, rec.exerr))
+                cov.checks.add((mnemonic, rec.check))
+                first.setdefault(("error", mnemonic, rec.err, rec.exerr), where)
+                first.setdefault(("check", mnemonic, rec.check), where)
             elif type(rec) is Done:
                 pass
         self.system.trace = None
@@ -590,8 +610,8 @@ class CompiledModel:
         if kind == RAISE:
             ti = tis[k]
             tid = tags[k]
-            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]
-            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]
+            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]  # with kind RAISE, arg is an int
+            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]  # with kind RAISE, arg is an int
         elif kind == DROP:
             ti = tis[k]
             tid = tags[k]
@@ -754,11 +774,14 @@ class CompiledModel:
         aid = state[start]
         tags = state[start + 1:start + n]
         active, watch = self.context(ai, state)
+        cur = self.current
+        self.where = (cur, self.nothing_index)
         a2, t2, bad, good = self._block(ai, aid, list(tags), mode, NOTHING, 0, None, active, watch)
         base_blk = (a2, *t2)
         base = (base_blk, bad, good)
         out = []
         for c, kind, k, arg in self.local_choices(ai, state):
+            self.where = (cur, c)
             a2, t2, bad, good = self._block(ai, aid, list(tags), mode, kind, k, arg, active, watch)
             blk = (a2, *t2)
             if blk == base_blk and not bad and not good:
@@ -849,6 +872,7 @@ class CompiledModel:
             v = [nphase]
             p_bad: list[Property] = []
             p_good: list[Property] = []
+            self.where = (self.current, self.prescan_index)
             for ai in range(naxes):
                 start = self.block_start[ai]
                 n = self.block_len[ai]

@@ -181,8 +181,9 @@ class Graph:
 
 def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | None = None,
             max_scans: int | None = None, max_seconds: float | None = None,
-            progress: Callable[[int, int], None] | None = None) -> Graph:
-    """Every state reachable from ``starts``, breadth first."""
+            progress: Callable[[int, int], None] | None = None, prune: Sequence[Predicate] = ()) -> Graph:
+    """Every state reachable from ``starts``, breadth first.  A state failing one of ``prune`` (a
+    declared integer domain left) is kept but not expanded, and the graph is then incomplete."""
     g = Graph(starts=list(starts))
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -233,6 +234,12 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
             quiet.append(-1)
             g.complete = False
             g.stopped = f"bounded: runs explored up to {max_scans} scans (max_scans)"
+            continue
+        if prune and not all(p(s) for p in prune):
+            succ.append(())
+            quiet.append(-1)
+            g.complete = False
+            g.stopped = "a declared integer domain was left (its states are not explored further)"
             continue
         ins = inputs_of(s)
         qc = combo_index[(ins,) if single else ins]
@@ -505,6 +512,7 @@ class _EventuallyFrom:
 
     def __init__(self, g: Graph, goal: list[bool], sources: list[int]) -> None:
         self.g, self.goal, self.sources = g, goal, [u for u in sources if not goal[u]]
+        self.doomed: set[int] = set()  # goal-free states from which a fair goal-free cycle is reachable
 
     def find(self) -> tuple[list[int], list[int]] | None:
         import networkx as nx
@@ -518,16 +526,58 @@ class _EventuallyFrom:
             for v in g.succ[u]:
                 if v in region:
                     dg.add_edge(u, v)
+        fair_comps = []
         for comp in nx.strongly_connected_components(dg):
             fair = [u for u in comp if g.quiet[u] in comp and (len(comp) > 1 or g.quiet[u] == u)]
-            if not fair:
-                continue
-            entry = min(comp, key=lambda u: (g.depth[u], u))
-            # a path from a source to the component through goal-free states
-            path = _path_within(g, self.sources, entry, region)
-            loop = _cycle_in(g, set(comp), entry) if len(comp) > 1 else [entry]
-            return path, loop
-        return None
+            if fair:
+                fair_comps.append((min(g.depth[u] for u in comp), comp, fair))
+        if not fair_comps:
+            return None
+        _d, comp, fair = min(fair_comps, key=lambda c: (c[0], min(c[1])))
+        entry = min(comp, key=lambda u: (g.depth[u], u))
+        path = _path_within(g, self.sources, entry, region)
+        # a cycle through the quiet scan: entry -> u, u -> quiet[u], quiet[u] -> entry
+        u = min(fair, key=lambda x: (g.depth[x], x))
+        loop = [*_steps(g, comp, entry, u), g.quiet[u]]
+        if g.quiet[u] != entry:
+            loop += _steps(g, comp, g.quiet[u], entry)
+        cyclic: set[int] = set()
+        for _d2, c, _f in fair_comps:
+            cyclic |= c
+        self.doomed = _backward_within(dg, cyclic)
+        return path, loop
+
+
+def _steps(g: Graph, members: set[int], a: int, b: int) -> list[int]:
+    """The states after ``a`` on a shortest path from ``a`` to ``b`` inside ``members`` (``b`` last)."""
+    if a == b:
+        return []
+    prev = {a: -1}
+    todo = deque([a])
+    while todo:
+        u = todo.popleft()
+        for v in g.succ[u]:
+            if v in members and v not in prev:
+                prev[v] = u
+                if v == b:
+                    out = [v]
+                    while prev[out[-1]] != a:
+                        out.append(prev[out[-1]])
+                    return out[::-1]
+                todo.append(v)
+    return [b]
+
+
+def _backward_within(dg: Any, targets: set[int]) -> set[int]:
+    seen = set(targets)
+    todo = deque(seen)
+    while todo:
+        v = todo.popleft()
+        for u in dg.predecessors(v):
+            if u not in seen:
+                seen.add(u)
+                todo.append(u)
+    return seen
 
 
 def _path_within(g: Graph, sources: list[int], target: int, region: set[int]) -> list[int]:
@@ -549,14 +599,15 @@ def _path_within(g: Graph, sources: list[int], target: int, region: set[int]) ->
 
 
 def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callable[[], list[list[int]]]) -> Verdict:
-    found = _EventuallyFrom(g, goal, list(dict.fromkeys(g.start_states))).find()
+    search = _EventuallyFrom(g, goal, list(dict.fromkeys(g.start_states)))
+    found = search.find()
     if found is None:
         return Verdict(prop, True if g.complete else None, "every fair run reaches it" if g.complete else
                        f"not contradicted in the {len(g.states)} states explored ({g.stopped})")
     path, loop = found
     return Verdict(prop, False, f"a fair run stays without it for ever: a cycle of {len(set(loop))} state(s) is "
                                 f"entered after {len(path) - 1} scan(s)", path, loop=loop,
-                   hanging_starts=[n for n, s in enumerate(g.start_states) if s == path[0]])
+                   hanging_starts=[n for n, s in enumerate(g.start_states) if s in search.doomed])
 
 
 def _livelock(model: ProgramModel, g: Graph, prop: ProgramProperty, preds: Callable[[], list[list[int]]]) -> Verdict:

@@ -52,7 +52,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from checker.core import CompiledModel
-from checker.model import Flat, Model
+from checker.model import Flat, Model, StepFacts
 from checker.properties import Property
 
 #: states expanded between two looks at the clock and the progress bar
@@ -365,15 +365,15 @@ class _Stop(Exception):
     pass
 
 
-def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
+def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: StepFacts, state: int, choice: int) -> None:
     where = (state, choice)
-    for c, t in facts.fired:  # type: ignore[attr-defined]  # facts of either back end
+    for c, t in facts.fired:
         first.setdefault(("transition", c, t), where)
-    for m, s in facts.executed:  # type: ignore[attr-defined]  # facts of either back end
+    for m, s in facts.executed:
         first.setdefault(("cell", m, s), where)
-    for m, e, x in facts.errors:  # type: ignore[attr-defined]  # facts of either back end
+    for m, e, x in facts.errors:
         first.setdefault(("error", m, e, x), where)
-    for m, c in facts.checks:  # type: ignore[attr-defined]  # facts of either back end
+    for m, c in facts.checks:
         first.setdefault(("check", m, c), where)
 
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Container, Iterable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -204,11 +204,12 @@ def _scenarios_traced_once_per_content() -> Iterator[None]:
     original = traceability.trace
     memo: dict[object, traceability.Traceability] = {}
 
-    def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> traceability.Traceability:
+    def trace(spec: ir.Spec, roots: Sequence[Path | str],
+              progress: Callable[[str, int | None, int | None], None] | None = None) -> traceability.Traceability:
         files = scenario_files([r for r in roots if Path(r).exists()])
         key = (spec, tuple(str(r) for r in roots), tuple((str(f), f.read_bytes()) for f in files))
         if key not in memo:
-            memo[key] = original(spec, roots)
+            memo[key] = original(spec, roots, progress)
         return memo[key]
 
     with pytest.MonkeyPatch.context() as mp:

@@ -46,6 +46,8 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
                 for combo in itertools.product(CIP_STARTS, repeat=3) if "Shutdown" in combo}
     assert len(report.graph.starts) == 64
     assert labels == expected and len(labels) == 37
+    fair = next(v for v in report.verdicts if v.prop.kind == "eventually")
+    assert fair.holds is False and {report.graph.starts[i].label for i in fair.hanging_starts} == expected
     # the trap: state 9 for ever, the shut-down axis's MSF erred with 12/12, its MAFR never ran
     m, g = report.model, report.graph
     for u in hang.trap:
@@ -236,3 +238,23 @@ def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_pa
     write_scenario(doc, tmp_path / "hang.yaml")
     assert (tmp_path / "hang.yaml").read_text(encoding="utf-8") == \
         (EXAMPLES / "fault_recovery_hang.yaml").read_text(encoding="utf-8")
+
+
+def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
+    (tmp_path / "count.txt").write_text(
+        "XIC(PART)ONS(PART_ONS)CTU(PARTS,3,0);\nXIC(PARTS.DN)XIC(ACK)RES(PARTS);\n"
+        "XIC(ACK)TON(T1,25,0);\nXIC(PART)MOV(7,CODE);\nXIC(ACK)MOV(CODE,LAST);\n", encoding="utf-8")
+    (tmp_path / "count.check.yaml").write_text(
+        "format: motionchart-program-system/1\nprogram: count.txt\ndomains: {PARTS.ACC: [0, 4]}\n"
+        "properties:\n  - {name: reset, kind: always_reachable, expr: 'PARTS.ACC == 0'}\n", encoding="utf-8")
+    system = load_program_system(tmp_path / "count.check.yaml", SPEC)
+    report = run_system(system, SPEC)
+    domains = report.domains()
+    # by hand: a 25 ms timer counted in 10 ms scans takes 0, 10, 20, 30; CODE is 0 or 7 and LAST copies it
+    assert "T1.ACC: {0, 10, 20, 30} (counted in scans of 10 ms up to the preset 25)" in domains
+    assert "CODE: {0, 7}" in domains and "LAST: {0, 7}" in domains
+    assert "PARTS.ACC: declared 0..4 (CTU in rung 0)" in domains
+    # five presses without ACK take the counter to 5: the declared domain is left, the search stops there
+    v = next(v for v in report.verdicts if v.prop.name == "domain of PARTS.ACC")
+    assert v.holds is False and report.model.describe(report.graph.states[v.path[-1]])["PARTS.ACC"] == 5
+    assert not report.graph.complete and report.exit_code == 1

@@ -278,7 +278,7 @@ def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
 
 
 @pytest.fixture(scope="module")
-def cell_graph():  # type: ignore[no-untyped-def]
+def cell_graph():
     from checker.program_search import explore
     system = load_program_system(EXAMPLES / "three_axis_cell.check.yaml", SPEC)
     model = system.model(SPEC)
@@ -290,7 +290,7 @@ def cell_graph():  # type: ignore[no-untyped-def]
 @given(st.lists(st.tuples(st.fixed_dictionaries({n: st.booleans() for n in ("START_PB", "STOP_PB", "RESET_PB",
                                                                                "ENABLE_SW")}),
                           st.sampled_from([None, "X_axis", "Y_axis", "Z_axis"])), min_size=1, max_size=15))
-def test_every_engine_run_is_a_path_of_the_explored_graph(cell_graph, run) -> None:  # type: ignore[no-untyped-def]
+def test_every_engine_run_is_a_path_of_the_explored_graph(cell_graph, run) -> None:
     """The engine (python-statemachine axes) driven by random button presses and axis faults: after
     every scan its state is a state of the complete exploration, reached by an edge of the graph."""
     model, graph, start = cell_graph

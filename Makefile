@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate bench install deps-system deps-node lint lint-run clean
+.PHONY: check test deep generate bench install deps-system deps-node deps-spin lint lint-run clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	@$(BIN)/python -c "import statecharts, checker, motionchart_spec"
 	@touch $(STAMP)
 
-install: $(STAMP) deps-system deps-node
+install: $(STAMP) deps-system deps-node deps-spin
 
 # Graphviz's `dot` renders diagrams: Debian's package when we are root, else the
 # graphviz-pure wheel (no root needed). Never fatal: text artefacts need no binary.
@@ -40,6 +40,17 @@ deps-node:
 	  fi; \
 	fi
 
+# SPIN and a C compiler run `motionchart check --engine spin`: Debian's packages when we
+# are root. Never fatal: without them the SPIN engine reports that it is missing and its
+# tests are skipped with the reason.
+deps-spin:
+	@if ! command -v spin >/dev/null 2>&1 || ! { command -v cc >/dev/null 2>&1 || command -v gcc >/dev/null 2>&1; }; then \
+	  if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing spin and gcc (apt-get)"; \
+	    (apt-get update -qq >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -qq spin gcc >/dev/null 2>&1) || true; \
+	  fi; \
+	fi
+
 check: install
 	@$(BIN)/motionchart validate
 	@$(BIN)/motionchart simulate --summary scenarios examples/programs
@@ -54,8 +65,10 @@ generate: install
 	@$(BIN)/motionchart generate
 	@$(BIN)/python tools/write_sources_doc.py
 
-# Checker speed against a hand-written reference BFS (prints figures; not a test).
+# Start-up times of the CLI (--help, one diagram) beside the interpreter's own, then checker
+# speed against a hand-written reference BFS (prints figures; not a test).
 bench: install
+	@$(BIN)/python benchmarks/startup.py
 	@$(BIN)/python benchmarks/bench.py
 	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
 	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors

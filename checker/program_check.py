@@ -57,7 +57,7 @@ from statecharts.program.ir import AXIS_UNTYPED, Program
 FORMAT = "motionchart-program-system/1"
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 _TOP_KEYS = ("format", "name", "description", "program", "axes", "tags", "inputs", "max_events", "max_scans",
-             "scan_ms", "properties", "sources")
+             "scan_ms", "domains", "properties", "sources")
 _AXIS_KEYS = ("type", "starts", "events")
 _PROP_KEYS = ("name", "kind", "expr", "goal", "within", "final", "description")
 
@@ -84,6 +84,8 @@ class ProgramSystem:
     max_scans: int | None = None
     scan_ms: int = 10
     properties: list[ProgramProperty] = field(default_factory=list)
+    #: declared integer domains: tag path -> (least, greatest)
+    domains: dict[str, tuple[int, int]] = field(default_factory=dict)
 
     def starts(self) -> list[Start]:
         out = []
@@ -276,9 +278,21 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
             continue
         props.append(ProgramProperty(str(pd.get("name") or f"{kind} {n}"), kind, str(pd.get("expr") or ""),
                                      str(pd.get("goal") or ""), within, str(pd.get("final") or ""), name, line))
+    domains: dict[str, tuple[int, int]] = {}
+    ddoc = doc.get("domains") or {}
+    if not isinstance(ddoc, Mapping):
+        err(("domains",), "domains: a mapping from integer tag paths to [least, greatest]")
+        ddoc = {}
+    for k, v in ddoc.items():
+        if (isinstance(v, list) and len(v) == 2 and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
+                and v[0] <= v[1]):
+            domains[str(k)] = (v[0], v[1])
+        else:
+            err(("domains", k), "a domain is [least, greatest], two integers")
     system = ProgramSystem(str(doc.get("name") or path.stem), name, program, pfile, axes,
                            [(str(k), v) for k, v in tags_doc.items()], inputs, int_inputs,
-                           count("max_events", 0) or 0, count("max_scans", None), count("scan_ms", 10) or 10, props)
+                           count("max_events", 0) or 0, count("max_scans", None), count("scan_ms", 10) or 10, props,
+                           domains)
     if errors:
         raise InputError(errors)
     return system
@@ -512,7 +526,25 @@ class ProgramReport:
             "motion_errors": [{"tag": t, "instruction": mn, "rung": r, "ERR": e, "EXERR": x, "check": c}
                               for t, mn, r, e, x, c in errors],
             "motion_never_done": [b.tag for k, b in enumerate(m.bindings) if k not in cov.done],
+            "domains": self.domains(),
         }
+
+    def domains(self) -> list[str]:
+        from checker.program_model import static_domains
+        start = dict(self.system.tags)
+        inputs = {*self.model.inputs, *self.model.int_inputs}
+        out = []
+        for d in static_domains(self.model, start):
+            if d.path in inputs:
+                continue
+            if d.path in self.system.domains:
+                lo, hi = self.system.domains[d.path]
+                out.append(f"{d.path}: declared {lo}..{hi}" + ("" if d.values is not None else f" ({d.why})"))
+            elif d.values is None:
+                out.append(f"{d.text()}: declare it (domains:) or bound the search (max_scans)")
+            else:
+                out.append(d.text())
+        return out
 
     def as_dict(self) -> dict[str, Any]:
         g = self.graph
@@ -578,6 +610,9 @@ class ProgramReport:
             "; ".join(f"{e['instruction']} {e['tag']} (rung {e['rung']}) ERR {e['ERR']}/EXERR {e['EXERR']} "
                       f"({e['check']})" for e in errs) or "none"))
         lines.append(f"  motion instructions never done: {', '.join(cov['motion_never_done']) or 'none'}")
+        lines.append("integer domains (computed from the program" + (", declared" if self.system.domains else "") + "):")
+        for d in cov["domains"]:
+            lines.append(f"  {d}")
         return "\n".join(lines) + "\n"
 
 
@@ -608,11 +643,14 @@ def _trap_summary(model: ProgramModel, graph: Graph, trap: Sequence[int]) -> lis
 
 def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[ProgramProperty] = (),
                max_states: int | None = None, max_seconds: float | None = None,
-               counterexamples: Path | None = None) -> ProgramReport:
+               counterexamples: Path | None = None, progress: Any = None) -> ProgramReport:
     model = system.model(spec)
     props = [*system.properties, *extra]
     if not props:
         props = [ProgramProperty("deadlock", "deadlock"), ProgramProperty("livelock", "livelock")]
+    domain_props = [ProgramProperty(f"domain of {k}", "invariant", f"{lo} <= {k} <= {hi}", file=system.file)
+                    for k, (lo, hi) in system.domains.items()]
+    props = [*domain_props, *props]
     predicates: dict[str, Any] = {}
     problems = []
     for p in props:
@@ -625,7 +663,7 @@ def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[Pro
     if problems:
         raise InputError(problems)
     graph = explore(model, system.starts(), max_states=max_states, max_scans=system.max_scans,
-                    max_seconds=max_seconds)
+                    max_seconds=max_seconds, prune=[predicates[p.expr] for p in domain_props], progress=progress)
     verdicts = check(model, graph, props, predicates)
     report = ProgramReport(system, model, graph, verdicts)
     if counterexamples is not None:
@@ -661,8 +699,16 @@ def run(args: argparse.Namespace, system_path: Path | None, out: TextIO) -> int:
             except ValueError as exc:
                 print(f"motionchart check: --property: {exc}", file=sys.stderr)
                 return EXIT_USAGE
+        progress = None
+        if not (args.quiet or args.json) and sys.stderr.isatty():
+            def progress(found: int, expanded: int) -> None:
+                print(f"\rexploring: {found:,} states found, {expanded:,} expanded", end="", file=sys.stderr,
+                      flush=True)
         report = run_system(system, spec, extra=extra, max_states=args.max_states, max_seconds=args.max_seconds,
-                            counterexamples=Path(args.counterexamples) if args.counterexamples else None)
+                            counterexamples=Path(args.counterexamples) if args.counterexamples else None,
+                            progress=progress)
+        if progress is not None:
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
     except (InputError, ProgramModelError) as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)

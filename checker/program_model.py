@@ -1185,3 +1185,130 @@ def _lit(value: Any) -> str:
 def _motion_mnemonics() -> tuple[str, ...]:
     from statecharts.program.table import instruction_table
     return tuple(instruction_table().motion)
+
+
+# --------------------------------------------------------------------------- integer domains
+
+
+@dataclass(frozen=True, slots=True)
+class Domain:
+    """The values an integer tag can take, as computed from the program: a finite set, or open."""
+
+    path: str
+    values: frozenset[int] | None  # None: open (arithmetic or a counter writes it)
+    why: str = ""  # what makes it open, or how it was computed
+
+    def text(self) -> str:
+        if self.values is None:
+            return f"{self.path}: open ({self.why})"
+        vs = sorted(self.values)
+        if len(vs) > 6 and all(b - a == vs[1] - vs[0] for a, b in itertools.pairwise(vs)):
+            return f"{self.path}: {vs[0]}..{vs[-1]} in steps of {vs[1] - vs[0]} ({self.why})" if self.why else \
+                f"{self.path}: {vs[0]}..{vs[-1]} in steps of {vs[1] - vs[0]}"
+        return f"{self.path}: {{{', '.join(map(str, vs))}}}" + (f" ({self.why})" if self.why else "")
+
+
+def static_domains(model: ProgramModel, initial: Mapping[str, Any] | None = None) -> list[Domain]:
+    """Integer domains computed from the program: the initial value, the constants and tags moved
+    into a tag (MOV, CLR, RES), the listed values of an integer input; a timer's accumulator
+    counted in scans up to its preset; open when arithmetic (ADD, SUB, MUL, NEG) or a counter
+    writes the tag."""
+    from statecharts.program.tags import convert
+    names = model.slot_names
+    values: dict[int, set[int]] = {}
+    open_: dict[int, str] = {}
+    moves: list[tuple[int, int]] = []  # (source slot, destination slot)
+    written_pre: set[int] = set()
+    start = dict(initial or {})
+    for s in model.slots:
+        t = model.slot_types[s]
+        if t not in INTEGER_BITS:
+            continue
+        # the value the set-up gives it (written before the prescan), else its initial value
+        v = start[names[s]] if names[s] in start else model.db.initial[s]
+        values[s] = {int(convert(t, v))}
+    for name, vs in model.int_inputs.items():
+        slot = model.ladder.slot(name)[0]
+        values.setdefault(slot, set()).update(vs)
+    timers: list[tuple[int, str]] = []
+    for rung, ins in model.instructions:
+        mn, ops = ins.mnemonic, ins.operands
+
+        def slot_of(op: Operand) -> int | None:
+            if isinstance(op, Reference) and op.constant and op.base in model.db.layouts:
+                try:
+                    return model.ladder.slot(str(op))[0]
+                except KeyError:
+                    return None
+            return None
+        if mn == "MOV":
+            d = slot_of(ops[1])
+            if d is None or d not in values:
+                continue
+            if isinstance(ops[0], Number) and isinstance(ops[0].value, int):
+                values[d].add(int(convert(model.slot_types[d], ops[0].value)))
+            else:
+                src = slot_of(ops[0])
+                if src is not None and src in values:
+                    moves.append((src, d))
+                else:
+                    open_[d] = f"MOV from {ops[0]} in rung {rung}"
+        elif mn == "CLR":
+            d = slot_of(ops[0])
+            if d is not None and d in values:
+                values[d].add(0)
+        elif mn in ("ADD", "SUB", "MUL", "NEG"):
+            d = slot_of(ops[-1])
+            if d is not None:
+                open_.setdefault(d, f"{mn} in rung {rung}")
+        elif mn in ("CTU", "CTD") and isinstance(ops[0], Reference):
+            try:
+                b = model.ladder.slot(f"{ops[0]}.PRE")[0]
+            except KeyError:
+                continue
+            open_.setdefault(b + 1, f"{mn} in rung {rung}")
+        elif mn in ("TON", "TOF", "RTO") and isinstance(ops[0], Reference):
+            try:
+                b = model.ladder.slot(f"{ops[0]}.PRE")[0]
+            except KeyError:
+                continue
+            timers.append((b, f"{mn} in rung {rung}"))
+        for op in ops:
+            if mn in ("MOV", "CLR") and op is ops[-1]:
+                d = slot_of(op)
+                if d is not None and names.get(d, "").endswith(".PRE"):
+                    written_pre.add(d)
+    changed = True
+    while changed:
+        changed = False
+        for src, d in moves:
+            if src in open_ and d not in open_:
+                open_[d] = f"MOV from the open {names[src]}"
+                changed = True
+            new = values[src] - values[d]
+            if new:
+                values[d] |= new
+                changed = True
+    out = []
+    dt = model.scan_ms
+    for b, why in timers:
+        acc = b + 1
+        if b in written_pre or b in open_ or len(values.get(b, ())) != 1:
+            open_.setdefault(acc, f"{why}, with a preset the program changes")
+            continue
+        pre = next(iter(values[b]))
+        top = max(0, -(-pre // dt) * dt)
+        values[acc] = values.get(acc, set()) | set(range(0, top + 1, dt))
+        values[acc] = {v for v in values[acc] if v % dt == 0 or v == 0}
+        open_.pop(acc, None)
+        out_why = f"counted in scans of {dt} ms up to the preset {pre}"
+        out.append(Domain(names[acc], frozenset(values[acc]), out_why))
+    done = {d.path for d in out}
+    for s in sorted(values):
+        if names[s] in done:
+            continue
+        if s in open_:
+            out.append(Domain(names[s], None, open_[s]))
+        else:
+            out.append(Domain(names[s], frozenset(values[s])))
+    return sorted(out, key=lambda d: d.path)

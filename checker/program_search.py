@@ -181,8 +181,9 @@ class Graph:
 
 def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | None = None,
             max_scans: int | None = None, max_seconds: float | None = None,
-            progress: Callable[[int, int], None] | None = None) -> Graph:
-    """Every state reachable from ``starts``, breadth first."""
+            progress: Callable[[int, int], None] | None = None, prune: Sequence[Predicate] = ()) -> Graph:
+    """Every state reachable from ``starts``, breadth first.  A state failing one of ``prune`` (a
+    declared integer domain left) is kept but not expanded, and the graph is then incomplete."""
     g = Graph(starts=list(starts))
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -233,6 +234,12 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
             quiet.append(-1)
             g.complete = False
             g.stopped = f"bounded: runs explored up to {max_scans} scans (max_scans)"
+            continue
+        if prune and not all(p(s) for p in prune):
+            succ.append(())
+            quiet.append(-1)
+            g.complete = False
+            g.stopped = "a declared integer domain was left (its states are not explored further)"
             continue
         ins = inputs_of(s)
         qc = combo_index[(ins,) if single else ins]
@@ -303,20 +310,48 @@ def _forward(g: Graph, sources: Iterable[int], allowed: Callable[[int], bool] | 
     return seen
 
 
-def _backward(g: Graph, pred: list[list[int]], targets: Iterable[int]) -> set[int]:
+class Reverse:
+    """The graph's edges backwards, by successor set: states that share their set of successors
+    (every state of one controller state does) are one group, so a backward search visits each
+    group once instead of each edge."""
+
+    def __init__(self, g: Graph) -> None:
+        groups: dict[int, int] = {}
+        self.members: list[list[int]] = []
+        self.of: list[list[int]] = [[] for _ in g.states]  # state -> groups whose successors include it
+        for u, ts in enumerate(g.succ):
+            if not ts:
+                continue
+            k = groups.get(id(ts))
+            if k is None:
+                k = groups[id(ts)] = len(self.members)
+                self.members.append([])
+                for v in ts:
+                    self.of[v].append(k)
+            self.members[k].append(u)
+
+
+def _backward(g: Graph, rev: Reverse, targets: Iterable[int]) -> set[int]:
+    """Every state from which one of ``targets`` is reachable (the targets included)."""
     seen = set(targets)
     todo = deque(seen)
+    done: set[int] = set()
+    members, of = rev.members, rev.of
     while todo:
         v = todo.popleft()
-        for u in pred[v]:
-            if u not in seen:
-                seen.add(u)
-                todo.append(u)
+        for k in of[v]:
+            if k in done:
+                continue
+            done.add(k)
+            for u in members[k]:
+                if u not in seen:
+                    seen.add(u)
+                    todo.append(u)
     return seen
 
 
-def _starts_reaching(g: Graph, pred: list[list[int]], targets: Iterable[int]) -> list[int]:
-    back = _backward(g, pred, targets)
+def _starts_reaching(g: Graph, rev: Reverse, targets: Iterable[int]) -> list[int]:
+    back = _backward(g, rev, targets)
     return [n for n, s in enumerate(g.start_states) if s in back]
 
 
@@ -382,12 +417,12 @@ def _into_trap(g: Graph, first: int) -> tuple[list[int], list[int], list[int]]:
 def check(model: ProgramModel, g: Graph, props: Sequence[ProgramProperty],
           predicates: dict[str, Predicate]) -> list[Verdict]:
     out: list[Verdict] = []
-    pred_cache: list[list[int]] | None = None
+    pred_cache: Reverse | None = None
 
-    def preds() -> list[list[int]]:
+    def preds() -> Reverse:
         nonlocal pred_cache
         if pred_cache is None:
-            pred_cache = g.predecessors()
+            pred_cache = Reverse(g)
         return pred_cache
 
     def holds_in(text: str) -> list[bool]:
@@ -454,7 +489,7 @@ def check(model: ProgramModel, g: Graph, props: Sequence[ProgramProperty],
 
 
 def _leads_to(g: Graph, prop: ProgramProperty, trigger: list[bool], goal: list[bool],
-              preds: Callable[[], list[list[int]]]) -> Verdict:
+              preds: Callable[[], Reverse]) -> Verdict:
     n = len(g.states)
     bound = prop.within
     if bound is None:
@@ -505,6 +540,7 @@ class _EventuallyFrom:
 
     def __init__(self, g: Graph, goal: list[bool], sources: list[int]) -> None:
         self.g, self.goal, self.sources = g, goal, [u for u in sources if not goal[u]]
+        self.doomed: set[int] = set()  # goal-free states from which a fair goal-free cycle is reachable
 
     def find(self) -> tuple[list[int], list[int]] | None:
         import networkx as nx
@@ -518,16 +554,58 @@ class _EventuallyFrom:
             for v in g.succ[u]:
                 if v in region:
                     dg.add_edge(u, v)
+        fair_comps = []
         for comp in nx.strongly_connected_components(dg):
             fair = [u for u in comp if g.quiet[u] in comp and (len(comp) > 1 or g.quiet[u] == u)]
-            if not fair:
-                continue
-            entry = min(comp, key=lambda u: (g.depth[u], u))
-            # a path from a source to the component through goal-free states
-            path = _path_within(g, self.sources, entry, region)
-            loop = _cycle_in(g, set(comp), entry) if len(comp) > 1 else [entry]
-            return path, loop
-        return None
+            if fair:
+                fair_comps.append((min(g.depth[u] for u in comp), comp, fair))
+        if not fair_comps:
+            return None
+        _d, comp, fair = min(fair_comps, key=lambda c: (c[0], min(c[1])))
+        entry = min(comp, key=lambda u: (g.depth[u], u))
+        path = _path_within(g, self.sources, entry, region)
+        # a cycle through the quiet scan: entry -> u, u -> quiet[u], quiet[u] -> entry
+        u = min(fair, key=lambda x: (g.depth[x], x))
+        loop = [*_steps(g, comp, entry, u), g.quiet[u]]
+        if g.quiet[u] != entry:
+            loop += _steps(g, comp, g.quiet[u], entry)
+        cyclic: set[int] = set()
+        for _d2, c, _f in fair_comps:
+            cyclic |= c
+        self.doomed = _backward_within(dg, cyclic)
+        return path, loop
+
+
+def _steps(g: Graph, members: set[int], a: int, b: int) -> list[int]:
+    """The states after ``a`` on a shortest path from ``a`` to ``b`` inside ``members`` (``b`` last)."""
+    if a == b:
+        return []
+    prev = {a: -1}
+    todo = deque([a])
+    while todo:
+        u = todo.popleft()
+        for v in g.succ[u]:
+            if v in members and v not in prev:
+                prev[v] = u
+                if v == b:
+                    out = [v]
+                    while prev[out[-1]] != a:
+                        out.append(prev[out[-1]])
+                    return out[::-1]
+                todo.append(v)
+    return [b]
+
+
+def _backward_within(dg: Any, targets: set[int]) -> set[int]:
+    seen = set(targets)
+    todo = deque(seen)
+    while todo:
+        v = todo.popleft()
+        for u in dg.predecessors(v):
+            if u not in seen:
+                seen.add(u)
+                todo.append(u)
+    return seen
 
 
 def _path_within(g: Graph, sources: list[int], target: int, region: set[int]) -> list[int]:
@@ -548,18 +626,19 @@ def _path_within(g: Graph, sources: list[int], target: int, region: set[int]) ->
     return g.path(inner[0])[:-1] + inner
 
 
-def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callable[[], list[list[int]]]) -> Verdict:
-    found = _EventuallyFrom(g, goal, list(dict.fromkeys(g.start_states))).find()
+def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callable[[], Reverse]) -> Verdict:
+    search = _EventuallyFrom(g, goal, list(dict.fromkeys(g.start_states)))
+    found = search.find()
     if found is None:
         return Verdict(prop, True if g.complete else None, "every fair run reaches it" if g.complete else
                        f"not contradicted in the {len(g.states)} states explored ({g.stopped})")
     path, loop = found
     return Verdict(prop, False, f"a fair run stays without it for ever: a cycle of {len(set(loop))} state(s) is "
                                 f"entered after {len(path) - 1} scan(s)", path, loop=loop,
-                   hanging_starts=[n for n, s in enumerate(g.start_states) if s == path[0]])
+                   hanging_starts=[n for n, s in enumerate(g.start_states) if s in search.doomed])
 
 
-def _livelock(model: ProgramModel, g: Graph, prop: ProgramProperty, preds: Callable[[], list[list[int]]]) -> Verdict:
+def _livelock(model: ProgramModel, g: Graph, prop: ProgramProperty, preds: Callable[[], Reverse]) -> Verdict:
     import networkx as nx
     n = len(g.states)
     waiting = [u for u in range(n) if model.waiting(g.states[u])]

@@ -10,6 +10,7 @@ axis is in Shutdown, 64 - 3**3 = 37 of the 64.
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import pytest
@@ -46,6 +47,8 @@ def test_recovery_hangs_exactly_from_the_starts_with_an_axis_in_shutdown(recover
                 for combo in itertools.product(CIP_STARTS, repeat=3) if "Shutdown" in combo}
     assert len(report.graph.starts) == 64
     assert labels == expected and len(labels) == 37
+    fair = next(v for v in report.verdicts if v.prop.kind == "eventually")
+    assert fair.holds is False and {report.graph.starts[i].label for i in fair.hanging_starts} == expected
     # the trap: state 9 for ever, the shut-down axis's MSF erred with 12/12, its MAFR never ran
     m, g = report.model, report.graph
     for u in hang.trap:
@@ -92,6 +95,11 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert code == 1
     assert "from 37 of 64 start(s)" in out and "MSF(" in out and "erred: ERR 12, EXERR 12" in out
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
+    capsys.readouterr()
+    assert main(["check", "--system", "fault_recovery", "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["states"] == 220 and doc["complete"] and doc["properties"][0]["holds"] is False
+    assert len(doc["properties"][0]["hanging_starts"]) == 37
 
 
 def test_cli_program_with_a_property(capsys) -> None:
@@ -131,6 +139,17 @@ def _starts(draw: st.DrawFn, axes: tuple[str, ...]) -> Start:
 def test_the_compiled_scan_is_the_engine_scan(text: str, data: st.DataObject) -> None:
     """Random programs and input/event sequences: every engine scan is the checker's successor
     under the same choice (so every engine run maps onto a path of the checker)."""
+    _same_scans(text, data)
+
+
+@pytest.mark.deep
+@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(text=programs(max_rungs=14), data=st.data())
+def test_the_compiled_scan_is_the_engine_scan_deep(text: str, data: st.DataObject) -> None:
+    _same_scans(text, data)
+
+
+def _same_scans(text: str, data: st.DataObject) -> None:
     program = parse_program_text("random.txt", text, spec=SPEC, form="neutral")
     axes = tuple(t.name for t in program.axes())
     names = {t.name for t in program.tags}
@@ -236,3 +255,54 @@ def test_the_committed_hang_scenario_is_what_the_checker_writes(recovery, tmp_pa
     write_scenario(doc, tmp_path / "hang.yaml")
     assert (tmp_path / "hang.yaml").read_text(encoding="utf-8") == \
         (EXAMPLES / "fault_recovery_hang.yaml").read_text(encoding="utf-8")
+
+
+def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
+    (tmp_path / "count.txt").write_text(
+        "XIC(PART)ONS(PART_ONS)CTU(PARTS,3,0);\nXIC(PARTS.DN)XIC(ACK)RES(PARTS);\n"
+        "XIC(ACK)TON(T1,25,0);\nXIC(PART)MOV(7,CODE);\nXIC(ACK)MOV(CODE,LAST);\n", encoding="utf-8")
+    (tmp_path / "count.check.yaml").write_text(
+        "format: motionchart-program-system/1\nprogram: count.txt\ndomains: {PARTS.ACC: [0, 4]}\n"
+        "properties:\n  - {name: reset, kind: always_reachable, expr: 'PARTS.ACC == 0'}\n", encoding="utf-8")
+    system = load_program_system(tmp_path / "count.check.yaml", SPEC)
+    report = run_system(system, SPEC)
+    domains = report.domains()
+    # by hand: a 25 ms timer counted in 10 ms scans takes 0, 10, 20, 30; CODE is 0 or 7 and LAST copies it
+    assert "T1.ACC: {0, 10, 20, 30} (counted in scans of 10 ms up to the preset 25)" in domains
+    assert "CODE: {0, 7}" in domains and "LAST: {0, 7}" in domains
+    assert "PARTS.ACC: declared 0..4 (CTU in rung 0)" in domains
+    # five presses without ACK take the counter to 5: the declared domain is left, the search stops there
+    v = next(v for v in report.verdicts if v.prop.name == "domain of PARTS.ACC")
+    assert v.holds is False and report.model.describe(report.graph.states[v.path[-1]])["PARTS.ACC"] == 5
+    assert not report.graph.complete and report.exit_code == 1
+
+
+@pytest.fixture(scope="module")
+def cell_graph():
+    from checker.program_search import explore
+    system = load_program_system(EXAMPLES / "three_axis_cell.check.yaml", SPEC)
+    model = system.model(SPEC)
+    start = system.starts()[0]
+    return model, explore(model, [start]), start
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.fixed_dictionaries({n: st.booleans() for n in ("START_PB", "STOP_PB", "RESET_PB",
+                                                                               "ENABLE_SW")}),
+                          st.sampled_from([None, "X_axis", "Y_axis", "Z_axis"])), min_size=1, max_size=15))
+def test_every_engine_run_is_a_path_of_the_explored_graph(cell_graph, run) -> None:
+    """The engine (python-statemachine axes) driven by random button presses and axis faults: after
+    every scan its state is a state of the complete exploration, reached by an edge of the graph."""
+    model, graph, start = cell_graph
+    assert graph.complete
+    engine = model.engine(start)
+    u = graph.index[model.initial(start)]
+    events = 0
+    for writes, fault in run:
+        event = (fault, "axis_fault") if fault is not None and events < model.max_events else None
+        events += event is not None
+        engine.scan(events=(event,) if event else (), **writes)
+        s = (events, *model.encode(engine.system)[1:])
+        v = graph.index[s]
+        assert v in graph.succ[u]
+        u = v

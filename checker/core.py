@@ -68,6 +68,7 @@ from typing import Any
 
 from checker.model import Flat, Model
 from checker.properties import Property
+from statecharts import drive
 from statecharts.scan import Done, Errored, Executed
 
 #: scan modes of a block
@@ -170,6 +171,10 @@ class CompiledModel:
         self._drop: list[dict[int, int]] = [{} for _ in model.slots]
         self._tick: list[dict[int, int]] = [{} for _ in model.axes]
         self._event: list[dict[tuple[int, str], int]] = [{} for _ in model.axes]
+        #: per axis, its chart's drive events in the order the scan applies them (after the tick)
+        self._drive: list[tuple[str, ...]] = [
+            tuple(e for e in drive.EVENTS if any(x.name == e and x.kind == "drive" for x in a.chart.events))
+            for a in model.axes]
         self._tag_post: list[dict[tuple[int, bool, int], tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
             {} for _ in model.slots]
         self._axis_post: list[dict[int, tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
@@ -625,6 +630,14 @@ class CompiledModel:
             h = ()
             t = self._tick[ai].get(core)
             core = t if t is not None else self.piece_tick(ai, core)
+            drive_events = self._drive[ai]
+            if drive_events and events:
+                # the drive model's outcomes come right after the tick (System._coarse_update)
+                for ev in drive_events:
+                    if ev in events:
+                        e = self._event[ai].get((core, ev))
+                        core = e if e is not None else self.piece_event(ai, core, ev)
+                events = tuple(ev for ev in events if ev not in drive_events)
             finish = self._finish
             for j in order:
                 tid = tags[j]

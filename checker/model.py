@@ -46,7 +46,7 @@ from checker.system import SystemDef, initial_assignments, operand_choices
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic
 from statecharts.expr import Expr
-from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System, TagInstance
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ProcessEnded, ScanInputs, System, TagInstance
 
 #: An abstract state: the clock phase, then axis and tag parts of several shapes (see
 #: :meth:`Model.extract`).
@@ -272,7 +272,8 @@ class Model:
         self.axes: list[Any] = list(self.system.axes.values())
         self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
         # a property tied to a chart the system has no axis of does not apply to it
-        self.properties = tuple(p for p in self.properties if p.chart is None or p.chart in self.charts)
+        self.properties = tuple(p for p in self.properties if (p.chart is None or p.chart in self.charts)
+                                and (not p.systems or sysdef.name in p.systems))
         self.notes: list[str] = []
 
         # cone of influence and the collapse abstraction
@@ -373,10 +374,12 @@ class Model:
         self.event_choices: list[Choice] = []
         for name, g in self.axis_defs:
             chart = self.charts[g.chart]
+            # drive events (a move reaching its target...) are free inputs: the motion abstraction
+            inputs = {e.name for e in chart.events if e.kind in ("environment", "drive")}
             events = sysdef.environment if sysdef.environment is not None else tuple(
-                e.name for e in chart.events if e.kind == "environment")
+                e.name for e in chart.events if e.kind in ("environment", "drive"))
             for ev in events:
-                if ev in {e.name for e in chart.events if e.kind == "environment"}:
+                if ev in inputs:
                     self.event_choices.append(self._choice(
                         "event", axis=name, event=ev, inputs=ScanInputs(events=(EnvironmentEvent(name, ev),))))
         self.fixed_choices = list(self.event_choices)
@@ -386,7 +389,7 @@ class Model:
 
         # run-time buffers and memo tables
         self.monitor_values: list[tuple[int, ...]] = [tuple(0 for _ in s.monitors) for s in self.slots]
-        self.trace: list[Executed | Errored | Done] = []
+        self.trace: list[Executed | Errored | Done | ProcessEnded] = []
         self.fired: list[list[str]] = [[] for _ in self.axes]
         for axis, f in zip(self.axes, self.fired):
             axis.fired = f
@@ -414,8 +417,9 @@ class Model:
             variables.update(dict(g.configurations[ci].variables))
             axes.append(make(self.spec.chart(g.chart), name, state=g.state, variables=variables,
                              parameters=self.params))
+        # motion=False: the drive model's arithmetic is abstracted away (its events are inputs)
         return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
-                      coarse_update_ms=self.sysdef.coarse_update_ms)
+                      coarse_update_ms=self.sysdef.coarse_update_ms, motion=False)
 
     # -- state <-> system -----------------------------------------------------------
 

@@ -110,7 +110,7 @@ def advance(env: MutableMapping[str, object], dt: float, master_velocity: float 
         if env["MoveStatus"]:
             if not env["MovePlanned"]:
                 env["MoveRemaining"] = planned_distance(
-                    position, _f(env, "MoveCommand"), int(env["MoveType"]), _unwind(env))
+                    position, _f(env, "MoveCommand"), int(_f(env, "MoveType")), _unwind(env))
                 env["MovePlanned"] = True
             remaining = _f(env, "MoveRemaining")
             step = abs(_f(env, "MoveSpeed")) * dt

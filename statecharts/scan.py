@@ -382,13 +382,13 @@ class System:
         for axis in self.axes.values():
             axis.send("tick")
             # the drive model's outcomes of the time that passed (docs/semantics.md)
-            for ev in due.get(axis.name, ()):
-                self._environment(axis, ev)
+            for name in due.get(axis.name, ()):
+                self._environment(axis, name)
             # what the passing time completed is done before this update's requests
             self._finish_pending(axis.name)
-            for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
-                self.queue.remove(name)
-                tag = self.tags[name]
+            for tag_name in [n for n in self.queue if self.tags[n].axis == axis.name]:
+                self.queue.remove(tag_name)
+                tag = self.tags[tag_name]
                 if tag.values.get("pending"):
                     self._deliver(axis, tag)
             for ev in events:

@@ -374,6 +374,8 @@ PROPERTY = {
         "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
         "scope": {"enum": ["axis", "tag"]},
         "chart": ID, "instruction": ID,
+        "systems": {"type": "array", "items": ID, "minItems": 1,
+                    "description": "Check the property only on these systems (by name); default: every system with its chart."},
         "where": EXPR, "holds": EXPR, "goal": EXPR,
         "trigger": EXPR, "response": EXPR, "unless": EXPR,
         "within": {"type": "integer", "minimum": 1, "maximum": 1000},

@@ -75,6 +75,9 @@ from statecharts.scan import Done, Errored, Executed
 NORMAL, COARSE, PRESCAN = 0, 1, 2
 #: input kinds of a choice (PRESCAN_PASS applies to every block)
 NOTHING, RAISE, DROP, EVENT, PRESCAN_PASS = 0, 1, 2, 3, 4
+#: a RAISE, DROP or EVENT together with a drive event of the axis: kind + WITH_DRIVE,
+#: argument (the base argument, the drive event)
+WITH_DRIVE = 10
 _CONDITIONS = ("rung_false", "rung_true", "prescan")
 
 State = tuple[int, ...]
@@ -157,6 +160,9 @@ class CompiledModel:
             assert c.axis is not None and c.event is not None
             self.events.append((c.index, axis_no[c.axis], c.event))
         self.tag_local = local_of
+        #: base choice -> its combinations with a drive event: (choice, drive event)
+        self.combos: dict[int, list[tuple[int, str]]] = {
+            b: [(c.index, str(c.drive)) for c in cs] for b, cs in model.drive_combos.items()}
 
         # per-tag derived facts of tag parts, computed on first use
         self._rung: list[bool] = []
@@ -583,6 +589,10 @@ class CompiledModel:
         (:meth:`context`).  A prescan pass always runs every tag."""
         core, q, h = self._split[aid]
         tis = self.tis[ai]
+        extra: str | None = None
+        if kind >= WITH_DRIVE:
+            kind -= WITH_DRIVE
+            arg, extra = arg  # type: ignore[misc]  # a combined choice's argument is (base argument, drive event)
         if active is None or mode == PRESCAN:
             order: tuple[int, ...] = tuple(range(len(tis)))
             watch = ()
@@ -604,6 +614,8 @@ class CompiledModel:
             tags[k] = r if r is not None else self.piece_drop(ti, tid)
         elif kind == EVENT:
             h = (*h, arg)  # type: ignore[arg-type]  # an EVENT choice's argument is its event name
+        if extra is not None:
+            h = (*h, extra)
         rung = self._rung
         pending = self._pending
         rows = self._rows
@@ -730,15 +742,22 @@ class CompiledModel:
         if limit is not None:
             live_flags = [self.live0(ti, state[start + 1 + j]) or j in q for j, ti in enumerate(tis)]
             nlive = sum(live_flags)
+        combos = self.combos
         for j, ti in enumerate(tis):
             if rung[state[start + 1 + j]]:
                 out.append((self.drops[ti], DROP, j, None))
+                for c2, d in combos.get(self.drops[ti], ()):
+                    out.append((c2, DROP + WITH_DRIVE, j, (None, d)))
             elif limit is None or nlive < limit or (live_flags is not None and live_flags[j]):
                 for c, kk in self.raises[ti]:
                     out.append((c, RAISE, j, kk))
+                    for c2, d in combos.get(c, ()):
+                        out.append((c2, RAISE + WITH_DRIVE, j, (kk, d)))
         for c, a, ev in self.events:
             if a == ai:
                 out.append((c, EVENT, 0, ev))
+                for c2, d in combos.get(c, ()):
+                    out.append((c2, EVENT + WITH_DRIVE, 0, (ev, d)))
         return out
 
     def moves(self, ai: int, state: Sequence[int], mode: int) -> tuple[

@@ -392,8 +392,8 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
         entry["rungs"] = dict(rungs)
         if c.kind == "raise" and c.operands:
             entry["operands"] = {c.tag: dict(c.operands)}
-        if c.kind == "event":
-            entry["events"] = [{"axis": c.axis, "event": c.event}]
+        if c.kind == "event" or c.drive:
+            entry["events"] = [{"axis": e.axis, "event": e.event} for e in c.inputs.events]
         if c.kind == "prescan":
             entry["prescan"] = True
         inputs.append(entry)

@@ -414,13 +414,16 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
     out += ["", "## Extended error codes", ""]
     rows = []
     for x in spec.extended_errors:
-        owner = next((i for i in spec.instructions if i.id == x.instruction), None)
-        x_checks = [c for c in ((*owner.checks, *owner.aborts) if owner else ()) if (c.err, c.exerr) == (x.err, x.exerr)]
+        # the extended error belongs to the mnemonic: the variant of that id, else every variant
+        owners = [i for i in spec.instructions if i.id == x.instruction] or list(spec.variants(x.instruction))
+        x_checks = [(i, c) for i in owners for c in (*i.checks, *i.aborts) if (c.err, c.exerr) == (x.err, x.exerr)]
+        page = owners[0].id if owners else x.instruction
         rows.append([
-            f"[{x.instruction}](instructions/{x.instruction}.md)", str(x.err), str(x.exerr), f"`{x.name}`",
+            f"[{x.instruction}](instructions/{page}.md)", str(x.err), str(x.exerr), f"`{x.name}`",
             cell(x.meaning), cell(confidence(x.confidence)), cell(x.provenance.source),
             interp_link(x.provenance.interpretation, ""),
-            ", ".join(f"[{c.id}](instructions/{x.instruction}.md#{anchor('check-' + c.id)})" for c in x_checks)
+            ", ".join((f"[{c.id}]" if len(owners) == 1 else f"[{i.id}.{c.id}]")
+                      + f"(instructions/{i.id}.md#{anchor('check-' + c.id)})" for i, c in x_checks)
             or "— (documented, not modelled)",
         ])
     out += table(["Instruction", "ERR", "EXERR", "Name", "Meaning", "Confidence", "Source", "Interpretation",

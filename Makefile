@@ -5,7 +5,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: check test deep generate bench install deps-system deps-node lint lint-run clean
+.PHONY: check test deep generate bench install deps-system deps-node deps-spin lint lint-run clean
 
 $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	@$(BIN)/python -c "import statecharts, checker, motionchart_spec"
 	@touch $(STAMP)
 
-install: $(STAMP) deps-system deps-node
+install: $(STAMP) deps-system deps-node deps-spin
 
 # Graphviz's `dot` renders diagrams: Debian's package when we are root, else the
 # graphviz-pure wheel (no root needed). Never fatal: text artefacts need no binary.
@@ -37,6 +37,17 @@ deps-node:
 	  if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
 	    echo "installing nodejs (apt-get)"; \
 	    (apt-get update -qq >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -qq nodejs >/dev/null 2>&1) || true; \
+	  fi; \
+	fi
+
+# SPIN and a C compiler run `motionchart check --engine spin`: Debian's packages when we
+# are root. Never fatal: without them the SPIN engine reports that it is missing and its
+# tests are skipped with the reason.
+deps-spin:
+	@if ! command -v spin >/dev/null 2>&1 || ! { command -v cc >/dev/null 2>&1 || command -v gcc >/dev/null 2>&1; }; then \
+	  if [ "$$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "installing spin and gcc (apt-get)"; \
+	    (apt-get update -qq >/dev/null 2>&1; DEBIAN_FRONTEND=noninteractive apt-get install -y -qq spin gcc >/dev/null 2>&1) || true; \
 	  fi; \
 	fi
 
@@ -74,9 +85,10 @@ deep: install
 	  --vectors .deep/vectors -q --known-failures examples/adapters/node/known-failures.txt; \
 	  else echo "node not found: the JavaScript example implementation is not run"; fi
 
-# ruff (rules in pyproject.toml) and mypy --strict (statecharts/, checker/, conformance/, motionchart/); fails on
-# any finding. lint-run is the checks alone (tests/test_lint.py runs it on a copy of the
-# sources with planted defects).
+# ruff (rules in pyproject.toml), mypy --strict (statecharts/, checker/, conformance/, motionchart/)
+# and the project's own rules (tools/lint_rules.py: a reason for every `type: ignore` and
+# `noqa`, no private names used across modules); fails on any finding. lint-run is the
+# checks alone (tests/test_lint.py runs it on a copy of the sources with planted defects).
 lint: install
 	@$(MAKE) --no-print-directory lint-run
 
@@ -84,6 +96,7 @@ lint-run:
 	@status=0; \
 	$(BIN)/python -m ruff check --no-cache . || status=1; \
 	$(BIN)/python -m mypy || status=1; \
+	$(BIN)/python tools/lint_rules.py . || status=1; \
 	exit $$status
 
 clean:

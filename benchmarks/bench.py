@@ -34,12 +34,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from checker.coverage import table as coverage_table  # noqa: E402
-from checker.model import Model  # noqa: E402
-from checker.properties import load_properties  # noqa: E402
-from checker.search import explore, stored_bytes  # noqa: E402
-from checker.system import bundled_systems, load_system  # noqa: E402
-from statecharts.loader import bundled_spec_dir, load_spec  # noqa: E402
+from checker.coverage import table as coverage_table
+from checker.model import Model
+from checker.properties import load_properties
+from checker.search import explore, stored_bytes
+from checker.system import bundled_systems, load_system
+from statecharts.loader import bundled_spec_dir, load_spec
 
 SIZES = (1, 3, 6, 9, 12)
 RUNS = 5
@@ -81,7 +81,7 @@ def reference_bfs(n: int) -> tuple[int, int]:
 # --------------------------------------------------------------------------- runs
 
 
-def timed(fn):  # type: ignore[no-untyped-def]
+def timed(fn):
     """(result, CPU seconds of this process): the machine is shared, wall time is noisy."""
     t0 = time.process_time()
     out = fn()
@@ -152,4 +152,7 @@ if __name__ == "__main__":
     # the ladder interpreter's figures, a separate section (benchmarks/ladder_bench.py)
     from benchmarks.ladder_bench import ladder_benchmark
     ladder_benchmark()
+    # the program checker's figures (benchmarks/program_bench.py)
+    from benchmarks.program_bench import program_benchmark
+    program_benchmark()
     raise SystemExit(code)

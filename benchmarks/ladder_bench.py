@@ -24,11 +24,11 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from statecharts.engine import AxisInstance  # noqa: E402
-from statecharts.loader import load_spec  # noqa: E402
-from statecharts.program.ladder import Ladder  # noqa: E402
-from statecharts.program.reader import parse_program_text  # noqa: E402
-from statecharts.scan import ScanInputs, System  # noqa: E402
+from statecharts.engine import AxisInstance
+from statecharts.loader import load_spec
+from statecharts.program.ladder import Ladder
+from statecharts.program.reader import parse_program_text
+from statecharts.scan import ScanInputs, System
 
 AXES = ("X_axis", "Y_axis", "Z_axis")
 SCANS = 400
@@ -56,7 +56,7 @@ def routine(rungs: int = 200) -> str:
     return "\n".join(out) + "\n"
 
 
-def _axes(spec):  # type: ignore[no-untyped-def]
+def _axes(spec):
     return [AxisInstance(spec.chart("AxisCIP"), a, state="Stopped", variables={"Connected": True, "DCBusUp": True})
             for a in AXES]
 
@@ -72,7 +72,7 @@ def ladder_benchmark() -> None:
 
     def full() -> float:
         system = System(spec, _axes(spec), [], ladder=Ladder(program))
-        system.ladder.prescan()  # type: ignore[union-attr]
+        system.ladder.prescan()
         t = time.perf_counter()
         for k in range(SCANS):
             system.advance(ScanInputs(writes=_inputs(k)))

@@ -12,10 +12,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, NoReturn, TextIO
+from typing import TYPE_CHECKING, Any, NoReturn, TextIO
 
 from statecharts.diagnostics import InputError
+
+if TYPE_CHECKING:  # the checker modules are imported when a check runs, not when the CLI starts
+    from checker.properties import Property
+    from statecharts import ir
 
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 DEFAULT_SYSTEM = "noncip"
@@ -74,7 +79,29 @@ def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentPa
     p.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     p.add_argument("--no-symmetry", action="store_true", help="explore without symmetry reduction")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar")
+    p.add_argument("--program", metavar="FILE",
+                   help="check a ladder program (.rll, .txt, .L5X) on its axes from every start "
+                        "(docs/program-checking.md); a program system file is given with --system")
+    p.add_argument("--property", action="append", metavar="KIND:TEXT",
+                   help="program systems: a property, e.g. 'invariant: not (A and B)', "
+                        "'always_reachable: NEXTSTATE == 1', 'leads_to: STATE == 9 -> NEXTSTATE == 1 within 50'")
+    p.add_argument("--max-events", type=_non_negative_int, metavar="N",
+                   help="program systems: at most N environment events per run (default: the system's)")
+    p.add_argument("--max-scans", type=positive_int, metavar="N",
+                   help="program systems: explore runs up to N scans (default: the system's, else unbounded)")
+    from checker import spin_cli
+    spin_cli.add_check_options(p)
     return p
+
+
+def _non_negative_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number of at least 0, got {text!r}")
+    return value
 
 
 def dispatch(args: argparse.Namespace) -> int | None:
@@ -102,7 +129,20 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
                 print(f"motionchart check: {problem}: {shown_name(p)!r}", file=sys.stderr)
                 return EXIT_USAGE
     from checker.aoi_check import bundled_aoi_systems
-    systems = {**bundled_systems(), **bundled_aoi_systems()}
+    from checker.program_check import bundled_program_systems, is_program_system
+    systems = {**bundled_systems(), **bundled_aoi_systems(), **bundled_program_systems()}
+    program_only = ("axes", "graphml", "properties", "max_changes")
+    if getattr(args, "program", None):
+        from checker import program_check
+        if path_argument_problem(args.program) is not None or not Path(args.program).is_file():
+            print(f"motionchart check: --program: no such file {shown_name(args.program)!r}", file=sys.stderr)
+            return EXIT_USAGE
+        unsupported = [f"--{o.replace('_', '-')}" for o in program_only if getattr(args, o, None)]
+        if unsupported or args.system != DEFAULT_SYSTEM:
+            print(f"motionchart check: {', '.join(unsupported) or '--system'} cannot be combined with --program",
+                  file=sys.stderr)
+            return EXIT_USAGE
+        return program_check.run(args, None, out)
     if args.list_systems:
         for name, path in systems.items():
             out.write(f"{name}\t{path}\n")
@@ -115,7 +155,34 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         print(f"motionchart check: unknown system {args.system!r}; bundled systems: {', '.join(systems)} "
               "(or give a system file)", file=sys.stderr)
         return EXIT_USAGE
+    from checker import spin_cli
+    problem = spin_cli.usage_problem(args)
+    if problem is not None:
+        print(f"motionchart check: {problem}", file=sys.stderr)
+        return EXIT_USAGE
+    if is_program_system(system_path) and args.engine == "spin":
+        print(f"motionchart check: --engine spin does not apply to the program system {args.system!r}",
+              file=sys.stderr)
+        return EXIT_USAGE
+    if is_program_system(system_path):
+        from checker import program_check
+        unsupported = [f"--{o.replace('_', '-')}" for o in program_only if getattr(args, o, None)] + (
+            ["--no-symmetry"] if args.no_symmetry else [])
+        if unsupported:
+            print(f"motionchart check: {', '.join(unsupported)} do(es) not apply to the program system "
+                  f"{args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
+        return program_check.run(args, system_path, out)
+    for opt in ("property", "max_events", "max_scans"):
+        if getattr(args, opt, None) is not None:
+            print(f"motionchart check: --{opt.replace('_', '-')} applies to program systems only, "
+                  f"not {args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
     from checker.aoi_check import is_aoi_system
+    if is_aoi_system(system_path) and args.engine == "spin":
+        print(f"motionchart check: --engine spin does not apply to the add-on instruction system {args.system!r}",
+              file=sys.stderr)
+        return EXIT_USAGE
     if is_aoi_system(system_path):
         from checker import aoi_check
         unsupported = [f"--{o.replace('_', '-')}" for o in ("axes", "graphml", "properties")
@@ -141,7 +208,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
             print(d, file=sys.stderr)
         return EXIT_VIOLATED
     except (EvalError, DivergenceError, ArithmeticError, RecursionError) as exc:
-        _cannot_explore(exc, props if "props" in locals() else (), spec)
+        _cannot_explore(exc, props if "props" in locals() else (), spec if "spec" in locals() else None)
         return EXIT_VIOLATED
     progress = False if (args.quiet or args.json) else None
     for opt, path in (("--graphml", args.graphml), ("--counterexamples", args.counterexamples)):
@@ -149,6 +216,8 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         if problem is not None:
             print(f"motionchart check: {opt} {shown_name(path)!r}: {problem}", file=sys.stderr)
             return EXIT_USAGE
+    if args.engine == "spin":
+        return spin_cli.check(model, args, out)
     try:
         result = explore(model, max_states=args.max_states, max_seconds=args.max_seconds,
                          keep_graph=args.graphml is not None, progress=progress)
@@ -169,21 +238,21 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
     return report.exit_code
 
 
-def _cannot_explore(exc: BaseException, props: object, spec: object) -> None:
+def _cannot_explore(exc: BaseException, props: Iterable[Property], spec: ir.Spec | None) -> None:
     where = _expression_site(props, spec, getattr(exc, "text", ""))
     print(f"{where or 'motionchart check: '}the system cannot be explored: {exc}", file=sys.stderr)
 
 
-def _expression_site(props: object, spec: object, text: str) -> str:
+def _expression_site(props: Iterable[Property], spec: ir.Spec | None, text: str) -> str:
     """``file:line: `` of the property or chart element whose expression is ``text``."""
     if not text:
         return ""
-    for p in props:  # type: ignore[attr-defined]
+    for p in props:
         for key in ("where", "holds", "goal", "trigger", "response", "unless"):
             e = getattr(p, key, None)
             if e is not None and e.text == text:
                 return f"{p.file}:{p.line}: property {p.name}: "
-    for c in spec.charts:  # type: ignore[attr-defined]
+    for c in spec.charts if spec is not None else ():
         for t in c.transitions:
             texts = [t.guard.text] if t.guard is not None else []
             texts += [a.value.text for a in t.actions] + [a.text for a in t.actions]

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, TextIO
 
-from checker import check_cli, render_cli
+from checker import check_cli, render_cli, spin_cli
 from conformance import cli as conformance_cli
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.inputs import path_argument_problem, shown_name
@@ -66,6 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--summary", action="store_true", help="print only failed scenarios and the closing count")
 
     check_cli.register(sub)
+    spin_cli.register(sub)
     render_cli.register(sub)
     conformance_cli.register(sub)
     return parser
@@ -112,7 +113,7 @@ def _run_command(args: argparse.Namespace) -> int:
         return _validate(args, sys.stdout)
     if args.command == "simulate":
         return _simulate(args, sys.stdout)
-    for extension in (check_cli, render_cli, conformance_cli):
+    for extension in (check_cli, spin_cli, render_cli, conformance_cli):
         code: int | None = extension.dispatch(args)
         if code is not None:
             return code
@@ -249,7 +250,9 @@ def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
             used = r["instructions"]
             assert isinstance(used, dict)
             out.write("  instructions: " + ", ".join(f"{m} x{k}" for m, k in used.items()) + "\n")
-            for w in r["warnings"]:  # type: ignore[attr-defined]
+            warnings = r["warnings"]
+            assert isinstance(warnings, list)
+            for w in warnings:
                 out.write(f"  note: {w}\n")
     for d in problems:
         print(d, file=sys.stderr)

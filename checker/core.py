@@ -64,11 +64,11 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 from checker.model import Flat, Model
 from checker.properties import Property
-from statecharts import drive
+from statecharts import drive, ir
 from statecharts.scan import Done, Errored, Executed
 
 #: scan modes of a block
@@ -97,6 +97,12 @@ class CoreCoverage:
     executed: set[tuple[str, str]] = field(default_factory=set)
     errors: set[tuple[str, int, int]] = field(default_factory=set)
     values: set[tuple[str, str, object]] = field(default_factory=set)
+    #: (instruction, check id) of every check or abort that failed first in some step
+    checks: set[tuple[str, str]] = field(default_factory=set)
+    #: every coverage item -> ``(state, choice)`` of the step that first showed it (the
+    #: state being expanded, :attr:`CompiledModel.current`, when the piece was computed);
+    #: items as :attr:`checker.search.Coverage.first` writes them
+    first: dict[tuple[object, ...], tuple[int, int]] = field(default_factory=dict)
 
 
 class Intern:
@@ -135,6 +141,10 @@ class CompiledModel:
         self.parts = Intern()  # abstract axis parts, as Model.extract writes them
         self.tags = Intern()  # tag parts (values, rung, operands, monitors)
         self.cov = CoreCoverage()
+        #: number of the state being expanded (set by the search; coverage witnesses)
+        self.current = -1
+        #: (state, choice) a newly computed piece's coverage facts are credited to
+        self.where: tuple[int, int] = (-1, -1)
         self.tis: list[tuple[int, ...]] = [tuple(t) for t in model.tags_of_axis]
         self.chart_of = [a.chart.id for a in model.axes]
         fields = model.slots[0].fields if model.slots else ()
@@ -202,6 +212,16 @@ class CompiledModel:
             self._views.append(v[1])
             self._view_core.append(v[2])
         self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
+        # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered)
+        self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
+            tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...]]]] = [{} for _ in model.axes]
+        self._tail_memo: list[dict[tuple[object, ...], tuple[int, tuple[int, ...], list[Property], list[Property]]]] = [
+            {} for _ in model.axes]
+        self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
+        self._finish_by_view: list[dict[tuple[int, tuple[object, ...]], int]] = [{} for _ in model.slots]
+        self._exec_proj: list[Callable[[int], tuple[object, ...]] | None] = [None] * len(model.slots)
+        self._finish_proj: list[Callable[[int], tuple[object, ...]] | None] = [None] * len(model.slots)
+        self._view_proj: list[Callable[[int], tuple[object, ...]] | None] = [None] * len(model.slots)
         self._watch_memo: list[dict[tuple[tuple[int, ...], int], tuple[tuple[int, ...], tuple[Property, ...],
                                                                   tuple[Property, ...]]]] = [{} for _ in model.axes]
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
@@ -237,7 +257,8 @@ class CompiledModel:
             i = tags.id(part)
             self._rung.append(bool(part[1]))
             pos = self._pending_pos
-            self._pending.append(bool(part[0][pos]) if pos >= 0 else False)  # type: ignore[index]
+            values = cast("tuple[object, ...]", part[0])  # the member and internal values
+            self._pending.append(bool(values[pos]) if pos >= 0 else False)
         return i
 
     def part_id(self, ai: int, part: tuple[object, ...]) -> int:
@@ -246,11 +267,13 @@ class CompiledModel:
         if i is None:
             i = parts.id(part)
             core = (part[0], part[1], part[2]) if len(part) > 4 else (part[0], part[1])
-            self._split.append((self.cores.id(core), tuple(part[-2]), tuple(part[-1])))  # type: ignore[arg-type]
-            self._busy.append(bool(part[-2] or part[-1]))
+            queue = cast("tuple[int, ...]", part[-2])  # queued requests, local tag numbers
+            held = cast("tuple[str, ...]", part[-1])  # held environment events
+            self._split.append((self.cores.id(core), tuple(queue), tuple(held)))
+            self._busy.append(bool(queue or held))
             cid = self.chart_of[ai]
-            self.cov.configs.add((cid, part[0]))  # type: ignore[arg-type]
-            for v, x in zip(self.model.axes[ai].c.variables, part[1]):  # type: ignore[call-overload]  # part[1] is the axis values tuple
+            self.cov.configs.add((cid, cast("frozenset[str]", part[0])))  # the configuration
+            for v, x in zip(self.model.axes[ai].c.variables, cast("tuple[object, ...]", part[1])):  # variable values
                 self.cov.values.add((cid, v, x))
         return i
 
@@ -355,19 +378,109 @@ class CompiledModel:
         self.system.trace = self.model.trace
 
     def _facts(self, ai: int) -> None:
-        """Record the coverage facts of the piece that just ran."""
+        """Record the coverage facts of the piece that just ran, each credited to the
+        step being computed (:attr:`where`) if no earlier step showed it."""
         cov = self.cov
+        first = cov.first
+        where = self.where
         cid = self.chart_of[ai]
         for t in self.model.fired[ai]:
             cov.fired.add((cid, t))
+            first.setdefault(("transition", cid, t), where)
         for rec in self.model.trace:
             if type(rec) is Executed:
-                cov.executed.add((self.system.tags[rec.tag].instruction.id, rec.axis_state))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                cov.executed.add((mnemonic, rec.axis_state))
+                first.setdefault(("cell", mnemonic, rec.axis_state), where)
             elif type(rec) is Errored:
-                cov.errors.add((self.system.tags[rec.tag].instruction.id, rec.err, rec.exerr))
+                mnemonic = self.system.tags[rec.tag].instruction.id
+                cov.errors.add((mnemonic, rec.err, rec.exerr))
+                cov.checks.add((mnemonic, rec.check))
+                first.setdefault(("error", mnemonic, rec.err, rec.exerr), where)
+                first.setdefault(("check", mnemonic, rec.check), where)
             elif type(rec) is Done:
                 pass
         self.system.trace = None
+
+    # ------------------------------------------------------------------ projections of axis cores
+
+    def projector(self, ai: int, names: Sequence[str]) -> Callable[[int], tuple[object, ...]]:
+        """A function of an axis core's number giving the values of ``names``
+        (``axis.X`` names as :meth:`checker.compile.FastAxis.expression_env` writes
+        them; other names are ignored) read straight from the core's snapshot, so that
+        a piece reading only those names is memoised by them rather than by the core.
+        A name the snapshot does not hold falls back to loading the core."""
+        axis = self.model.axes[ai]
+        c = axis.c
+        chart = axis.chart
+        variables = list(c.variables)
+        getters: list[tuple[int, int]] = []  # (kind, index): 0 variable, 1 leaf id, 2 leaf value, 3 configuration
+        slow = False
+        for n in sorted({n for n in names if n.startswith("axis.")}):
+            x = n[5:]
+            if x == "state":
+                getters.append((1, 0))
+            elif x == "active":
+                getters.append((3, 0))
+            elif x == "chart":
+                continue  # the same for every core of the axis
+            elif x == chart.state_attribute:
+                getters.append((2, 0))
+            elif x in variables:
+                getters.append((0, variables.index(x)))
+            else:
+                slow = True
+        cores = self.cores.values
+        if slow:
+            allnames = sorted({n for n in names if n.startswith("axis.")})
+
+            def load(core: int) -> tuple[object, ...]:
+                env = self._load_core(ai, core).expression_env()
+                return tuple(env.get(n) for n in allnames)
+            return load
+        leaf = c.leaf
+
+        def project(core: int) -> tuple[object, ...]:
+            snap = cores[core]
+            out: list[object] = []
+            for kind, i in getters:
+                if kind == 0:
+                    out.append(snap[1][i])
+                elif kind == 1:
+                    out.append(leaf(snap[0]).id)
+                elif kind == 2:
+                    out.append(leaf(snap[0]).value)
+                else:
+                    out.append(snap[0])
+            return tuple(out)
+        return project
+
+    def _exec_view(self, ti: int, ai: int, core: int) -> tuple[object, ...]:
+        """What tag ``ti``'s execution reads of its axis core: the ``execute`` checks'
+        names and the leaf state (the instruction x state cell)."""
+        f = self._exec_proj[ti]
+        if f is None:
+            ins = self.model.slots[ti].tag.instruction
+            names = {"axis.state"}
+            for ch in ins.checks:
+                if ch.stage is ir.Stage.EXECUTE:
+                    names |= ch.fails_when.names
+            f = self._exec_proj[ti] = self.projector(ai, sorted(names))
+        return f(core)
+
+    def _finish_view(self, ti: int, ai: int, core: int) -> tuple[object, ...]:
+        """What finishing tag ``ti`` reads of its axis core: the completion condition's
+        and the aborts' names."""
+        f = self._finish_proj[ti]
+        if f is None:
+            ins = self.model.slots[ti].tag.instruction
+            names: set[str] = set()
+            if ins.done_when is not None:
+                names |= ins.done_when.names
+            for ab in ins.aborts:
+                names |= ab.fails_when.names
+            f = self._finish_proj[ti] = self.projector(ai, sorted(names))
+        return f(core)
 
     # ------------------------------------------------------------------ pieces (cold path)
 
@@ -411,7 +524,13 @@ class CompiledModel:
         return r
 
     def piece_exec(self, ti: int, ai: int, tid: int, core: int) -> tuple[int, bool]:
-        """The instruction executes: checks of stage execute; (tag, accepted)."""
+        """The instruction executes: checks of stage execute; (tag, accepted).  Cores
+        that look the same to the checks share the result (and its coverage facts)."""
+        vkey = (tid, self._exec_view(ti, ai, core))
+        r = self._exec_by_view[ti].get(vkey)
+        if r is not None:
+            self._exec[ti][(tid, core)] = r
+            return r
         self._load_core(ai, core)
         tag = self._load_tag(ti, tid)
         system = self.system
@@ -423,9 +542,17 @@ class CompiledModel:
         system.queue = []
         r = (self._read_tag(ti), accepted)
         self._exec[ti][(tid, core)] = r
+        self._exec_by_view[ti][vkey] = r
         return r
 
     def piece_finish(self, ti: int, ai: int, tid: int, core: int) -> int:
+        """A pending instruction is finished: DN, ER by an abort, or still pending.
+        Cores that look the same to its completion and aborts share the result."""
+        vkey = (tid, self._finish_view(ti, ai, core))
+        r = self._finish_by_view[ti].get(vkey)
+        if r is not None:
+            self._finish[ti][(tid, core)] = r
+            return r
         self._load_core(ai, core)
         tag = self._load_tag(ti, tid)
         self._begin(ai)
@@ -433,6 +560,7 @@ class CompiledModel:
         self._facts(ai)
         r = self._read_tag(ti)
         self._finish[ti][(tid, core)] = r
+        self._finish_by_view[ti][vkey] = r
         return r
 
     def piece_deliver(self, ti: int, ai: int, tid: int, core: int) -> tuple[int, int]:
@@ -466,10 +594,10 @@ class CompiledModel:
     def view(self, ti: int, ai: int, core: int) -> int:
         """The number of what tag ``ti``'s properties read of its axis (the ``axis.X``
         names) in axis core ``core``: cores that look the same to them share it."""
-        names = self._axis_names[ti]
-        axis = self._load_core(ai, core)
-        env = axis.expression_env()
-        seen = tuple(env.get(n) for n in names)
+        f = self._view_proj[ti]
+        if f is None:
+            f = self._view_proj[ti] = self.projector(ai, self._axis_names[ti])
+        seen = f(core)
         views = self._views[ti]
         v = views.index.get(seen)
         if v is None:
@@ -583,16 +711,53 @@ class CompiledModel:
                ) -> tuple[int, list[int], list[Property], list[Property]]:
         """One scan of axis ``ai``'s block: its axis part ``aid`` and tag parts ``tags``
         (changed in place), in scan mode ``mode``, with local input (``kind``, tag ``k``, ``arg``).
+        Returns (axis part, tags, violated, reached).
 
         ``active`` lists the tags that are not inert (None: every tag) and ``watch`` the
         inert ones whose properties are evaluated; the others are left as they are
-        (:meth:`context`).  A prescan pass always runs every tag."""
+        (:meth:`context`).  A prescan pass always runs every tag.  The scan is
+        :meth:`_prefix` (steps 1 to 3 up to the deliveries), then at a coarse update
+        :meth:`_apply_events` and :meth:`_finish_all`, then :meth:`_post` (step 4)."""
+        core, q, h, events, order, watch = self._prefix(ai, aid, tags, mode, kind, k, arg, active, watch)
+        if mode == COARSE:
+            core = self._apply_events(ai, core, events)
+            a2, t2, bad, good = self._tail(ai, tags, core, order, watch)
+            tags[:] = t2
+            return a2, tags, list(bad), list(good)
+        return self._post(ai, tags, core, q, h, order, watch)
+
+    def _tail(self, ai: int, mid: list[int], core: int, order: tuple[int, ...], watch: tuple[int, ...]
+              ) -> tuple[int, tuple[int, ...], list[Property], list[Property]]:
+        """The end of a coarse-update scan once its events are applied: the pending
+        instructions finished, then step 4 (the queue and held events are empty by
+        then).  Memoised by (axis core, tag parts, tags scanned, tags watched): the
+        scans of many states and choices end alike.  ``mid`` is not changed."""
+        key = (core, tuple(mid), order, watch)
+        memo = self._tail_memo[ai]
+        r = memo.get(key)
+        if r is None:
+            t = list(mid)
+            self._finish_all(ai, t, core, order)
+            a2, t2, bad, good = self._post(ai, t, core, (), (), order, watch)
+            r = (a2, tuple(t2), bad, good)
+            if len(memo) > 1_000_000:  # bounded: a cache, not state
+                memo.clear()
+            memo[key] = r
+        return r
+
+    def _prefix(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object,
+                active: tuple[int, ...] | None, watch: tuple[int, ...]) -> tuple[
+                    int, tuple[int, ...], tuple[str, ...], tuple[str, ...], tuple[int, ...], tuple[int, ...]]:
+        """Steps 1 and 2 of a scan and, at a coarse update, step 3 up to the deliveries
+        (tick, finishing, queued requests).  ``tags`` are changed in place; returns
+        (axis core, queue, held events, events to apply now, tags scanned, tags watched)."""
         core, q, h = self._split[aid]
         tis = self.tis[ai]
         extra: str | None = None
         if kind >= WITH_DRIVE:
             kind -= WITH_DRIVE
-            arg, extra = arg  # type: ignore[misc]  # a combined choice's argument is (base argument, drive event)
+            assert type(arg) is tuple  # a combined choice's argument is (base argument, drive event)
+            arg, extra = arg
         if active is None or mode == PRESCAN:
             order: tuple[int, ...] = tuple(range(len(tis)))
             watch = ()
@@ -605,15 +770,17 @@ class CompiledModel:
         if kind == RAISE:
             ti = tis[k]
             tid = tags[k]
-            r = self._raise[ti].get((tid, arg))  # type: ignore[arg-type]
-            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)  # type: ignore[arg-type]
+            assert type(arg) is int  # a RAISE choice's argument is its operand index
+            r = self._raise[ti].get((tid, arg))
+            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)
         elif kind == DROP:
             ti = tis[k]
             tid = tags[k]
             r = self._drop[ti].get(tid)
             tags[k] = r if r is not None else self.piece_drop(ti, tid)
         elif kind == EVENT:
-            h = (*h, arg)  # type: ignore[arg-type]  # an EVENT choice's argument is its event name
+            assert type(arg) is str  # an EVENT choice's argument is its event name
+            h = (*h, arg)
         if extra is not None:
             h = (*h, extra)
         rung = self._rung
@@ -636,50 +803,64 @@ class CompiledModel:
                 if accepted:
                     q = (*(x for x in q if x != j), j)
             tags[j] = tid
-        # 3. coarse update
-        if mode == COARSE:
-            events = h
-            h = ()
-            t = self._tick[ai].get(core)
-            core = t if t is not None else self.piece_tick(ai, core)
-            drive_events = self._drive[ai]
-            if drive_events and events:
-                # the drive model's outcomes come right after the tick (System._coarse_update)
-                for ev in drive_events:
-                    if ev in events:
-                        e = self._event[ai].get((core, ev))
-                        core = e if e is not None else self.piece_event(ai, core, ev)
-                events = tuple(ev for ev in events if ev not in drive_events)
-            finish = self._finish
-            for j in order:
-                tid = tags[j]
-                if pending[tid] and j not in q:
-                    ti = tis[j]
-                    f = finish[ti].get((tid, core))
-                    tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
-            for j in q:
-                tid = tags[j]
-                if pending[tid]:
-                    ti = tis[j]
-                    d = self._deliver[ti].get((tid, core))
-                    if d is None:
-                        d = self.piece_deliver(ti, ai, tid, core)
-                    tags[j], core = d
-            q = ()
-            for ev in events:
-                e = self._event[ai].get((core, ev))
-                core = e if e is not None else self.piece_event(ai, core, ev)
-            for j in order:
-                tid = tags[j]
-                if pending[tid]:
-                    ti = tis[j]
-                    f = finish[ti].get((tid, core))
-                    tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
-        # 4. properties, then abstractions
+        if mode != COARSE:
+            return core, q, h, (), order, watch
+        # 3. coarse update, up to the deliveries
+        events = h
+        t = self._tick[ai].get(core)
+        core = t if t is not None else self.piece_tick(ai, core)
+        drive_events = self._drive[ai]
+        if drive_events and events:
+            # the drive model's outcomes come right after the tick (System._coarse_update)
+            for ev in drive_events:
+                if ev in events:
+                    e = self._event[ai].get((core, ev))
+                    core = e if e is not None else self.piece_event(ai, core, ev)
+            events = tuple(ev for ev in events if ev not in drive_events)
+        finish = self._finish
+        for j in order:
+            tid = tags[j]
+            if pending[tid] and j not in q:
+                ti = tis[j]
+                f = finish[ti].get((tid, core))
+                tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
+        for j in q:
+            tid = tags[j]
+            if pending[tid]:
+                ti = tis[j]
+                d = self._deliver[ti].get((tid, core))
+                if d is None:
+                    d = self.piece_deliver(ti, ai, tid, core)
+                tags[j], core = d
+        return core, (), (), events, order, watch
+
+    def _apply_events(self, ai: int, core: int, events: tuple[str, ...]) -> int:
+        """Step 3, the held environment events applied in order to axis core ``core``."""
+        memo = self._event[ai]
+        for ev in events:
+            e = memo.get((core, ev))
+            core = e if e is not None else self.piece_event(ai, core, ev)
+        return core
+
+    def _finish_all(self, ai: int, tags: list[int], core: int, order: tuple[int, ...]) -> None:
+        """The end of step 3: every pending instruction of ``order`` finished, in program order."""
+        pending = self._pending
+        finish = self._finish
+        tis = self.tis[ai]
+        for j in order:
+            tid = tags[j]
+            if pending[tid]:
+                ti = tis[j]
+                f = finish[ti].get((tid, core))
+                tags[j] = f if f is not None else self.piece_finish(ti, ai, tid, core)
+
+    def _post(self, ai: int, tags: list[int], core: int, q: tuple[int, ...], h: tuple[str, ...],
+              order: tuple[int, ...], watch: tuple[int, ...]) -> tuple[int, list[int], list[Property], list[Property]]:
+        """Step 4: properties on the concrete parts, then the abstractions; (axis part,
+        tags (changed in place), violated, reached)."""
+        tis = self.tis[ai]
         bad: list[Property] = []
         good: list[Property] = []
-        reads = self._reads_axis
-        posts = self._tag_post
         if watch:
             # inert tags are not touched by the scan: their post-scan evaluation is one
             # look-up for all of them, keyed by their parts and the axis core
@@ -694,25 +875,27 @@ class CompiledModel:
                 bad.extend(wr[1])
             if wr[2]:
                 good.extend(wr[2])
-        for seq in (order,):
-            for j in seq:
-                ti = tis[j]
-                tid = tags[j]
-                if reads[ti]:
-                    view = self._view[ti].get(core)
-                    if view is None:
-                        view = self.view(ti, ai, core)
-                else:
-                    view = -1
-                key = (tid, j in q, view)
-                p = posts[ti].get(key)
-                if p is None:
-                    p = self.piece_tag_post(ti, ai, tid, key[1], view)
-                tags[j] = p[0]
-                if p[1]:
-                    bad.extend(p[1])
-                if p[2]:
-                    good.extend(p[2])
+        reads = self._reads_axis
+        posts = self._tag_post
+        views = self._view
+        for j in order:
+            ti = tis[j]
+            tid = tags[j]
+            if reads[ti]:
+                view = views[ti].get(core)
+                if view is None:
+                    view = self.view(ti, ai, core)
+            else:
+                view = -1
+            key = (tid, j in q, view)
+            p = posts[ti].get(key)
+            if p is None:
+                p = self.piece_tag_post(ti, ai, tid, key[1], view)
+            tags[j] = p[0]
+            if p[1]:
+                bad.extend(p[1])
+            if p[2]:
+                good.extend(p[2])
         ap = self._axis_post[ai].get(core)
         if ap is None:
             ap = self.piece_axis_post(ai, core)
@@ -784,14 +967,54 @@ class CompiledModel:
                     self._remember(ai, key, r2)
                     return r2
         aid = state[start]
-        tags = state[start + 1:start + n]
-        active, watch = self.context(ai, state)
-        a2, t2, bad, good = self._block(ai, aid, list(tags), mode, NOTHING, 0, None, active, watch)
+        tags = tuple(state[start + 1:start + n])
+        q = self._split[aid][1]
+        ckey = (q, tags)
+        cc = self._ctx_memo[ai].get(ckey)
+        if cc is None:
+            cc = (*self.context(ai, state), tuple(self.local_choices(ai, state)))
+            self._ctx_memo[ai][ckey] = cc
+        active, watch, choices = cc
+        cur = self.current
+        self.where = (cur, self.nothing_index)
+        # the base (no input); an event choice shares its steps 1 to 3 up to the
+        # deliveries (an event is only held in step 1), so those are scanned once
+        mid = list(tags)
+        core_m, q_m, h_m, events, order, w = self._prefix(ai, aid, mid, mode, NOTHING, 0, None, active, watch)
+        coarse = mode == COARSE
+        t2: Sequence[int]
+        if coarse:
+            core_b = self._apply_events(ai, core_m, events) if events else core_m
+            a2, t2, bad, good = self._tail(ai, mid, core_b, order, w)
+        else:
+            core_b = core_m
+            a2, t2, bad, good = self._post(ai, list(mid), core_b, q_m, h_m, order, w)
         base_blk = (a2, *t2)
         base = (base_blk, bad, good)
         out = []
-        for c, kind, k, arg in self.local_choices(ai, state):
-            a2, t2, bad, good = self._block(ai, aid, list(tags), mode, kind, k, arg, active, watch)
+        evmemo = self._event[ai]
+        for c, kind, k, arg in choices:
+            self.where = (cur, c)
+            if kind == EVENT:
+                assert type(arg) is str  # an EVENT choice's argument is its event name
+                if coarse:
+                    if events:
+                        core_e = self._apply_events(ai, core_m, (*events, arg))
+                    else:
+                        e = evmemo.get((core_m, arg))
+                        core_e = e if e is not None else self.piece_event(ai, core_m, arg)
+                    if core_e == core_b:
+                        continue  # the same scan as the base's
+                    a2, t2, bad, good = self._tail(ai, mid, core_e, order, w)
+                else:
+                    # the event is held: only the axis part's held events differ
+                    h_e = (*h_m, arg)
+                    ap_core = self._axis_post[ai][core_b][0]
+                    a2 = self._join[ai].get((ap_core, q_m, h_e)) or self.join(ai, ap_core, q_m, h_e)
+                    out.append((c, (a2, *base_blk[1:]), base[1], base[2]))
+                    continue
+            else:
+                a2, t2, bad, good = self._block(ai, aid, list(tags), mode, kind, k, arg, active, watch)
             blk = (a2, *t2)
             if blk == base_blk and not bad and not good:
                 continue
@@ -881,6 +1104,7 @@ class CompiledModel:
             v = [nphase]
             p_bad: list[Property] = []
             p_good: list[Property] = []
+            self.where = (self.current, self.prescan_index)
             for ai in range(naxes):
                 start = self.block_start[ai]
                 n = self.block_len[ai]

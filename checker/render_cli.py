@@ -4,8 +4,10 @@ Pipeline position: CLI layer over :mod:`statecharts.render`.  :func:`register` a
 three sub-commands to the main parser's sub-parsers; :func:`dispatch` runs one and
 returns its exit code (``None`` for a command that is not one of these).
 
-* ``motionchart diagram CHART [--format dot|svg|png|mermaid] [-o FILE] [--spec PATH]``:
-  a chart's state diagram, or, for an instruction mnemonic (``MSO``), its flowchart;
+* ``motionchart diagram CHART [--format dot|svg|png|pdf|mermaid] [-o FILE] [--labels events|guards|full]
+  [--part NAME] [--spec PATH]``: a chart's state diagram, or, for an instruction mnemonic (``MSO``), its
+  flowchart (``--part overview`` or a composite state's id for a large chart, ``part1`` ... for a long
+  flowchart);
   for an add-on instruction (``spec/aoi/``), ``<ID>`` draws its flowchart and
   ``<ID>_recovery`` its recovery chart.
   The format defaults to the output file's suffix (``.dot``/``.gv``, ``.svg``, ``.png``,
@@ -62,6 +64,12 @@ def register(subparsers: Any) -> None:
                    help="output format (default: from -o's extension: .dot .gv .svg .png .pdf .mmd .mermaid; "
                         "else dot)")
     d.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of standard output")
+    d.add_argument("--labels", choices=("events", "guards", "full"), default=None,
+                   help="how much text edges carry: events (triggers only), guards (event [guard], the default), "
+                        "full (with actions)")
+    d.add_argument("--part", metavar="NAME", default="whole",
+                   help="a large chart's overview or one composite state (e.g. --part overview, --part Standby), "
+                        "or part1, part2 ... of a long flowchart (default: whole)")
     d.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
 
     r = subparsers.add_parser(
@@ -159,10 +167,28 @@ def _diagram(args: argparse.Namespace, prog: str) -> int:
         target = resolve(spec, args.chart)
     except UnknownTarget as exc:
         return _aoi_diagram(args, prog, fmt, str(exc))
+    from statecharts.render.dot import DEFAULT_LABELS
+    from statecharts.render.flowchart import flowchart_part_names
+    from statecharts.render.views import view_names
+
+    labels = args.labels or DEFAULT_LABELS
+    part = args.part
+    names = view_names(target) if isinstance(target, ir.Chart) else flowchart_part_names(spec, target)
     if isinstance(target, ir.Chart):
-        text = chart_mermaid(target) if fmt == "mermaid" else chart_dot(target)
+        from statecharts.render.views import leaf_composites
+        names = (*names, *(s.id for s in leaf_composites(target) if s.id not in names))
+    folded = [n for n in names if n.casefold() == part.casefold()]
+    if not folded:
+        return _fail(prog, f"{target.id} has no part {part!r}; parts: {', '.join(names)}", EXIT_USAGE)
+    part = folded[0]
+    if fmt == "mermaid" and (part != "whole" or args.labels not in (None, "full")):
+        return _fail(prog, "the Mermaid text is of the whole diagram with full labels; drop --part/--labels",
+                     EXIT_USAGE)
+    if isinstance(target, ir.Chart):
+        text = chart_mermaid(target) if fmt == "mermaid" else chart_dot(target, labels=labels, part=part)
     else:
-        text = instruction_mermaid(spec, target) if fmt == "mermaid" else instruction_dot(spec, target)
+        text = (instruction_mermaid(spec, target) if fmt == "mermaid"
+                else instruction_dot(spec, target, labels=labels, part=part))
     return _emit(args, prog, fmt, text)
 
 

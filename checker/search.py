@@ -52,7 +52,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from checker.core import CompiledModel
-from checker.model import Flat, Model
+from checker.model import Flat, Model, StepFacts
 from checker.properties import Property
 
 #: states expanded between two looks at the clock and the progress bar
@@ -365,16 +365,41 @@ class _Stop(Exception):
     pass
 
 
-def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: object, state: int, choice: int) -> None:
+def _note_witnesses(first: dict[tuple[object, ...], tuple[int, int]], facts: StepFacts, state: int, choice: int) -> None:
     where = (state, choice)
-    for c, t in facts.fired:  # type: ignore[attr-defined]
+    for c, t in facts.fired:
         first.setdefault(("transition", c, t), where)
-    for m, s in facts.executed:  # type: ignore[attr-defined]
+    for m, s in facts.executed:
         first.setdefault(("cell", m, s), where)
-    for m, e, x in facts.errors:  # type: ignore[attr-defined]
+    for m, e, x in facts.errors:
         first.setdefault(("error", m, e, x), where)
-    for m, c in facts.checks:  # type: ignore[attr-defined]
+    for m, c in facts.checks:
         first.setdefault(("check", m, c), where)
+
+
+@dataclass(frozen=True)
+class WitnessRun:
+    """A shortest run that shows one coverage item: start in configuration assignment
+    ``assignment`` (an index of ``model.assignments``), then scan with each choice of
+    ``choices`` (indices of ``model.choices``) in turn; the last scan shows the item.
+    ``states`` are the numbers of the states the run passes through, the start first."""
+
+    item: tuple[object, ...]
+    assignment: int
+    choices: tuple[int, ...]
+    states: tuple[int, ...]
+
+
+def witness_run(result: SearchResult, item: tuple[object, ...]) -> WitnessRun:
+    """The shortest run to coverage ``item`` of a search made with ``witnesses=True``
+    (:func:`explore` or :func:`explore_interpreted`; :attr:`Coverage.first` lists the
+    items).  The run's length is the least number of scans that shows the item.
+
+    Raises ``KeyError`` for an item the search did not cover (or recorded no witnesses)."""
+    state, choice = result.coverage.first[item]
+    path = result.path(state)
+    return WitnessRun(item=item, assignment=path[0][1], choices=(*(c for _s, c in path[1:]), choice),
+                      states=tuple(s for s, _c in path))
 
 
 def is_property_decided(result: SearchResult, p: Property) -> bool:
@@ -424,13 +449,16 @@ def explore(
     progress: bool | None = None,
     on_progress: Callable[[int, int, float], None] | None = None,
     stop_on_violation: bool = False,
+    witnesses: bool = False,
 ) -> SearchResult:
     """Explore every state of ``model`` reachable from its initial states, breadth first,
     on the compiled core (:mod:`checker.core`).
 
     With ``stop_on_violation`` the search ends (incomplete) after the expansion in which
     the first invariant or response violation was found; that violation is still one of
-    least depth."""
+    least depth.  With ``witnesses`` the coverage records, for every item, a step of
+    least depth that covered it (:attr:`Coverage.first`; :func:`witness_run` gives the
+    run to it)."""
     start = time.perf_counter()
     core = CompiledModel(model)
     codec = CoreCodec(core)
@@ -516,6 +544,7 @@ def explore(
                     on_progress(i, len(encoded), elapsed)
             own = encoded[i]
             d = depth_of[i] + 1
+            core.current = i
             succs: set[bytes] = set()
             for c, succ, bad, good in successors(unpack(own)):
                 try:
@@ -564,7 +593,8 @@ def explore(
             bar.stop()
     seconds = time.perf_counter() - start
     cov = core.cov
-    coverage = Coverage(set(cov.configs), set(cov.fired), set(cov.executed), set(cov.errors), set(cov.values))
+    coverage = Coverage(set(cov.configs), set(cov.fired), set(cov.executed), set(cov.errors), set(cov.values),
+                        set(cov.checks), dict(cov.first) if witnesses else {})
     return SearchResult(
         model=model, states=len(encoded), transitions=transitions,
         depth=max(depth_of) if len(depth_of) else 0, seconds=seconds, complete=stop_reason is None,

@@ -37,7 +37,7 @@ def _seconds(text: str) -> float:
     return value
 
 
-def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
+def register(sub: argparse._SubParsersAction[Any]) -> None:
     v = sub.add_parser("vectors", help="write the conformance suite: one JSON vector per case, and a manifest",
                        description="Export every hand-written scenario and a shortest checker-generated run for "
                                    "each transition, error code, instruction x state cell and check boundary as "

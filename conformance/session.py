@@ -33,7 +33,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import EnvironmentEvent, Errored, Executed, ScanInputs, System
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -145,8 +145,8 @@ class Session:
             self._write_operands(p["tag"], p.get("operands", {}))
         self.record = record
         self.covered = Covered()
-        if record:
-            self.system.orders = self.covered.orders  # type: ignore[attr-defined]
+        if isinstance(self.system, _RecordingSystem):
+            self.system.orders = self.covered.orders
             for axis in axes:
                 axis.fired = []
             self._note_states()
@@ -183,8 +183,8 @@ class Session:
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         si = ScanInputs(rungs=rungs, operands=operands, events=tuple(events), prescan=bool(inputs.get("prescan", False)))
         if self.record:
-            trace: list[object] = []
-            system.trace = trace  # type: ignore[assignment]
+            trace: list[Executed | Errored | Done] = []
+            system.trace = trace
             for axis in system.axes.values():
                 axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
             system.advance(si)
@@ -199,7 +199,7 @@ class Session:
             cid = axis.chart.id
             self.covered.states.update(f"{cid}:{s}" for s in axis.active)
 
-    def _note(self, trace: list[object]) -> None:
+    def _note(self, trace: list[Executed | Errored | Done]) -> None:
         cov = self.covered
         for axis in self.system.axes.values():
             cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)  # type: ignore[attr-defined]  # see above

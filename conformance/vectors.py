@@ -113,7 +113,7 @@ def _slug(text: str) -> str:
 def _universe(spec: ir.Spec) -> dict[str, list[str]]:
     from checker import coverage
     shim = SimpleNamespace(spec=spec)
-    out = {k: coverage.universe(shim, k, whole_spec=True) for k in ("states", "transitions", "error_codes", "cells")}  # type: ignore[arg-type]
+    out = {k: coverage.universe(shim, k, whole_spec=True) for k in ("states", "transitions", "error_codes", "cells")}  # type: ignore[arg-type]  # whole_spec reads .spec only
     out["checks"] = [f"{ins.id}.{c.id}" for ins in spec.instructions for c in ins.checks]
     out["orders"] = [order_item(ins, k) for ins in spec.instructions for k in range(len(ins.checks) - 1)
                      if observable_order(ins, k)]
@@ -304,7 +304,9 @@ def _item_text(item: tuple[object, ...]) -> tuple[str, str]:
     if kind == "transition":
         return "transitions", f"{item[1]}:{item[2]}"
     if kind == "error":
-        return "error_codes", error_item(str(item[1]), int(item[2]), int(item[3]))  # type: ignore[call-overload]
+        err, exerr = item[2], item[3]
+        assert isinstance(err, int) and isinstance(exerr, int)
+        return "error_codes", error_item(str(item[1]), err, exerr)
     if kind == "cell":
         return "cells", f"{item[1]}@{item[2]}"
     return "checks", f"{item[1]}.{item[2]}"
@@ -314,9 +316,9 @@ def _witness_search(search: Any) -> Callable[..., Any]:
     """The search that records the first step covering each item (``witnesses=True``)."""
     import inspect
     for name in ("explore", "explore_interpreted"):
-        fn = getattr(search, name, None)
+        fn: Callable[..., Any] | None = getattr(search, name, None)
         if fn is not None and "witnesses" in inspect.signature(fn).parameters:
-            return fn  # type: ignore[no-any-return]
+            return fn
     raise RuntimeError("no search of checker.search records coverage witnesses")
 
 

@@ -1592,6 +1592,5 @@ def run_aoi_scenario(scenario: AoiScenario, spec: AoiSpec) -> Any:
             actual = before[obj][fld]
             if not same_value(expected, actual):
                 mismatches.append(Mismatch(step.index, step.name, world.index, obj, fld, expected, actual, step.line))
-    # an AoiScenario stands in for a Scenario here (callers read only the fields both have)
-    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))  # type: ignore[arg-type]
+    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))  # type: ignore[arg-type]  # callers read only fields both scenarios have
 

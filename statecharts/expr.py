@@ -725,15 +725,15 @@ class _Compiler:
         k = operand.key
         if isinstance(node.op, ast.Not):
             if k is not None:
-                fn = lambda env: not env[k]  # noqa: E731
+                fn = lambda env: not env[k]
             else:
-                fn = lambda env: not f(env)  # noqa: E731
+                fn = lambda env: not f(env)
         elif isinstance(node.op, ast.USub):
             dyn: _DynFn = f
-            fn = lambda env: -dyn(env)  # noqa: E731
+            fn = lambda env: -dyn(env)
         else:
             pos: _DynFn = f
-            fn = lambda env: +pos(env)  # noqa: E731
+            fn = lambda env: +pos(env)
         return _folded(fn) if operand.const else _Node(fn)
 
     def binop(self, node: ast.BinOp) -> _Node:
@@ -853,13 +853,13 @@ class _Compiler:
         fn: Fn
         if n == 1:
             a0 = args[0].fn
-            fn = lambda env: f(a0(env))  # noqa: E731
+            fn = lambda env: f(a0(env))
         elif n == 2:
             a0, a1 = args[0].fn, args[1].fn
-            fn = lambda env: f(a0(env), a1(env))  # noqa: E731
+            fn = lambda env: f(a0(env), a1(env))
         else:
             fs = tuple(a.fn for a in args)
-            fn = lambda env: f(*[g(env) for g in fs])  # noqa: E731
+            fn = lambda env: f(*[g(env) for g in fs])
         if all(a.const for a in args):
             return _folded(fn)
         return _Node(fn)

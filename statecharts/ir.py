@@ -79,6 +79,16 @@ class Interpretation:
 
 
 @dataclass(frozen=True, slots=True)
+class DocumentedValue:
+    """One documented value of a variable (a status code): what it means and where it is documented."""
+
+    value: bool | int | str
+    meaning: str
+    confidence: Confidence
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
 class Variable:
     """A typed variable with a finite domain (``None`` domain means unbounded real)."""
 
@@ -91,6 +101,8 @@ class Variable:
     location: Location
     #: a program may write it (SSV), so a scenario step may ``set:`` it
     writable: bool = False
+    #: documented values (status codes) with their meanings, in spec order
+    values: tuple[DocumentedValue, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,7 +11,7 @@ unknown interpretations and error codes), and returns a :class:`~statecharts.ir.
 
 Each node kind of the spec language has its accepted keys in one module constant
 (``CHART_KEYS``, ``STATE_KEYS``... collected in :data:`NODE_KEYS`).  The builder reads
-YAML mappings only through :class:`_Node`, which refuses a key its kind does not
+YAML mappings only through :class:`Node`, which refuses a key its kind does not
 declare, and ``tests/test_schema_agreement.py`` asserts that each constant equals the
 properties of the same node in ``spec/schema/spec.schema.json`` -- so the schema and
 the loader cannot drift apart.
@@ -91,7 +91,8 @@ STATE_KEYS = frozenset(
     {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states", "implies"}
 ) | _PROVENANCE
 TRANSITION_KEYS = frozenset({"id", "from", "to", "event", "guard", "actions", "priority"}) | _PROVENANCE
-VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description", "writable"}) | _PROVENANCE
+VARIABLE_KEYS = frozenset({"name", "type", "domain", "range", "initial", "description", "writable", "values"}) | _PROVENANCE
+VALUE_KEYS = frozenset({"value", "meaning", "confidence"}) | _PROVENANCE
 EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
 INSTRUCTION_KEYS = frozenset(
     {"id", "mnemonic", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
@@ -126,6 +127,7 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "state": STATE_KEYS,
     "transition": TRANSITION_KEYS,
     "variable": VARIABLE_KEYS,
+    "value": VALUE_KEYS,
     "event": EVENT_KEYS,
     "instruction": INSTRUCTION_KEYS,
     "operand": OPERAND_KEYS,
@@ -146,7 +148,7 @@ NODE_KEYS: dict[str, frozenset[str]] = {
 }
 
 
-class _Node:
+class Node:
     """Read access to one schema-checked YAML mapping, limited to the keys of its kind.
 
     Reading a key that the kind's constant does not declare is a bug in the loader
@@ -179,12 +181,12 @@ class _Node:
         self._declared(key)
         return key in self.raw
 
-    def items(self, key: str, kind: str) -> list[_Node]:
+    def items(self, key: str, kind: str) -> list[Node]:
         """The mappings of the list under ``key``, each read as a ``kind`` node."""
-        return [_Node(x, kind) for x in self.get(key) or ()]
+        return [Node(x, kind) for x in self.get(key) or ()]
 
-    def child(self, key: str, kind: str) -> _Node:
-        return _Node(self[key], kind)
+    def child(self, key: str, kind: str) -> Node:
+        return Node(self[key], kind)
 
 
 def bundled_spec_dir() -> Path:
@@ -760,8 +762,8 @@ class _File:
     tree: Any
 
     @property
-    def top(self) -> _Node:
-        return _Node(self.tree, "file")
+    def top(self) -> Node:
+        return Node(self.tree, "file")
 
 
 @dataclass
@@ -780,7 +782,7 @@ class _Builder:
         line, col = locate(f.tree, parts)
         return ir.Location(f.name, line, col, node_path(parts))
 
-    def prov(self, f: _File, parts: tuple[Any, ...], node: _Node) -> ir.Provenance:
+    def prov(self, f: _File, parts: tuple[Any, ...], node: Node) -> ir.Provenance:
         interp = node.get("interpretation") if node.declares("interpretation") else None
         if interp is not None:
             self.interp_refs.append((str(interp), f, (*parts, "interpretation")))
@@ -825,7 +827,7 @@ class _Builder:
                 out.append(a)
         return tuple(out)
 
-    def duplicates(self, f: _File, parts: tuple[Any, ...], items: Sequence[_Node], key: str, what: str) -> None:
+    def duplicates(self, f: _File, parts: tuple[Any, ...], items: Sequence[Node], key: str, what: str) -> None:
         seen: dict[Any, int] = {}
         for i, item in enumerate(items):
             k = item.get(key)
@@ -836,7 +838,7 @@ class _Builder:
 
     # -- variables -----------------------------------------------------------
 
-    def variable(self, f: _File, parts: tuple[Any, ...], v: _Node) -> ir.Variable:
+    def variable(self, f: _File, parts: tuple[Any, ...], v: Node) -> ir.Variable:
         vtype = v["type"]
         domain = v.get("domain")
         initial = v["initial"]
@@ -866,11 +868,20 @@ class _Builder:
                     domain = list(range(lo, hi + 1)) if hi - lo <= 4096 else None
         if domain is not None and initial not in domain:
             self.error(f, (*parts, "initial"), f"initial value {initial!r} is not in the domain {list(domain)!r}")
+        values: list[ir.DocumentedValue] = []
+        for j, n in enumerate(v.items("values", "value") if "values" in v else ()):
+            vp = (*parts, "values", j)
+            if domain is not None and n["value"] not in domain:
+                self.error(f, (*vp, "value"), f"documented value {n['value']!r} is not in the domain {list(domain)!r}")
+            if any(x.value == n["value"] for x in values):
+                self.error(f, (*vp, "value"), f"value {n['value']!r} is documented twice")
+            values.append(ir.DocumentedValue(n["value"], str(n["meaning"]), ir.Confidence(n.get("confidence", "C")),
+                                             self.prov(f, vp, n)))
         return ir.Variable(
             name=v["name"], type=vtype, initial=initial,
             domain=tuple(domain) if domain is not None else None,
             description=str(v.get("description", "")), provenance=self.prov(f, parts, v),
-            location=self.loc(f, parts), writable=bool(v.get("writable", False)),
+            location=self.loc(f, parts), writable=bool(v.get("writable", False)), values=tuple(values),
         )
 
     def implies(self, f: _File, parts: tuple[Any, ...], given: Any, variables: Sequence[ir.Variable]) -> tuple[tuple[str, object], ...]:
@@ -898,7 +909,7 @@ class _Builder:
 
     # -- charts --------------------------------------------------------------
 
-    def chart(self, f: _File, c: _Node) -> ir.Chart:
+    def chart(self, f: _File, c: Node) -> ir.Chart:
         base: tuple[Any, ...] = ("chart",)
         var_nodes = c.items("variables", "variable")
         self.duplicates(f, (*base, "variables"), var_nodes, "name", "variable")
@@ -922,7 +933,7 @@ class _Builder:
         states: list[ir.State] = []
         state_nodes: dict[str, tuple[Any, ...]] = {}
 
-        def walk(nodes: Sequence[_Node], parts: tuple[Any, ...], parent: str | None) -> list[str]:
+        def walk(nodes: Sequence[Node], parts: tuple[Any, ...], parent: str | None) -> list[str]:
             # recursion depth is bounded by MAX_YAML_DEPTH, checked before the schema
             ids = []
             for i, s in enumerate(nodes):
@@ -1140,7 +1151,7 @@ class _Builder:
     # -- instructions ----------------------------------------------------------
 
     def instruction(
-        self, f: _File, node: _Node, charts: dict[str, ir.Chart], tables: dict[str, ir.ExecutionTable],
+        self, f: _File, node: Node, charts: dict[str, ir.Chart], tables: dict[str, ir.ExecutionTable],
     ) -> ir.Instruction:
         base: tuple[Any, ...] = ("instruction",)
         chart_list = []
@@ -1249,7 +1260,7 @@ class _Builder:
             location=self.loc(f, base), process=process, master_operand=master_operand,
         )
 
-    def tag_type(self, f: _File, node: _Node) -> ir.TagType:
+    def tag_type(self, f: _File, node: Node) -> ir.TagType:
         base: tuple[Any, ...] = ("tag_type",)
         member_nodes = node.items("members", "tag_member")
         self.duplicates(f, (*base, "members"), member_nodes, "name", "member")
@@ -1283,7 +1294,7 @@ class _Builder:
         return ir.TagType(name=node["name"], members=tuple(members), internal=internal,
                           provenance=self.prov(f, base, node), wrong_axis_family=wrong)
 
-    def table(self, f: _File, parts: tuple[Any, ...], node: _Node, tag_type: ir.TagType) -> ir.ExecutionTable:
+    def table(self, f: _File, parts: tuple[Any, ...], node: Node, tag_type: ir.TagType) -> ir.ExecutionTable:
         names = [m.name for m in tag_type.members] + [v.name for v in tag_type.internal]
         rows = []
         row_nodes = node.items("rows", "table_row")
@@ -1321,7 +1332,7 @@ _EMPTY_TABLE = ir.ExecutionTable("", (), (), (), (), (), ir.Provenance(""))
 
 def _other_format(tree: Any) -> bool:
     """A file of another motionchart format (``motionchart-properties/1``...), not a spec file."""
-    fmt = _Node(tree, "file").get("format") if isinstance(tree, dict) else None
+    fmt = Node(tree, "file").get("format") if isinstance(tree, dict) else None
     return isinstance(fmt, str) and fmt.startswith("motionchart-") and not fmt.startswith("motionchart-spec/")
 
 

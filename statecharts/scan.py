@@ -109,7 +109,7 @@ class ScanInputs:
     events: tuple[EnvironmentEvent, ...] = ()
     prescan: bool = False
     #: program tag writes made before the scan (push buttons, limit switches): path -> value
-    writes: Mapping[str, object] = field(default_factory=dict)
+    writes: Mapping[str, bool | int | float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True, slots=True)
@@ -280,7 +280,7 @@ class System:
         ladder = self.ladder
         assert ladder is not None
         for path, value in inputs.writes.items():
-            ladder.write(path, value)  # type: ignore[arg-type]
+            ladder.write(path, value)
         self.held_events.extend(inputs.events)
         coarse = False
         if inputs.prescan:
@@ -320,7 +320,7 @@ class System:
         phase, axes, tags, queue, held = cast(
             "tuple[int, tuple[Any, ...], tuple[Any, ...], tuple[str, ...], tuple[tuple[str, str], ...]]", snap[:5])
         if self.ladder is not None:
-            self.ladder.db.restore(snap[5])  # type: ignore[arg-type]
+            self.ladder.db.restore(cast("tuple[bool | int | float, ...]", snap[5]))
         self.index = phase
         for axis, a in zip(self.axes.values(), axes):
             axis.restore(a)

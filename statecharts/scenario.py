@@ -63,6 +63,8 @@ class Step:
     sets: tuple[tuple[str, str, object], ...] = ()
     #: with ``within: N`` the step lasts until its expectations hold, at most N scans
     within: int | None = None
+    #: checked after each of the step's scans (scenarios with a ladder program: docs/programs.md)
+    always: tuple[tuple[str, str, object], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -197,8 +199,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
-        # an AoiScenario stands in for a Scenario (run_scenario hands it to the AOI runner)
-        return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]
+        return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]  # run_scenario hands it to the AOI runner
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
@@ -324,12 +325,12 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
                 continue
             for fname, value in fields.items():
                 if fname == expectations.PASSES_THROUGH and target in charts:
-                    expect.append((target, fname, _passes_through(charts[target], value, (*p, "expect", target, fname), err)))
+                    expect.append((target, fname, passes_through_expectation(charts[target], value, (*p, "expect", target, fname), err)))
                     continue
                 if fname not in allowed:
                     err((*p, "expect", target, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
                     continue
-                matcher, problem = expectations.parse(value, numeric=_numeric_observable(spec, charts.get(target), fname))
+                matcher, problem = expectations.parse(value, numeric=numeric_observable(spec, charts.get(target), fname))
                 if problem is None and not isinstance(matcher, expectations.Approx):
                     # a plain value, or the value after `not:`, must be one the observable can take
                     plain = matcher.value if isinstance(matcher, expectations.Not) else matcher
@@ -531,11 +532,7 @@ def run_scenario(
     from statecharts import aoi
     from statecharts.program.scenario import ProgramScenario, run_program_scenario
     if isinstance(scenario, ProgramScenario):
-        program_result: ScenarioResult = run_program_scenario(scenario, spec)
-        if on_row is not None:
-            for row in program_result.rows:
-                on_row(row)
-        return program_result
+        return run_program_scenario(scenario, spec, on_row=on_row, keep_rows=keep_rows)
     if isinstance(scenario, aoi.AoiScenario):
         result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
         if on_row is not None:
@@ -546,10 +543,22 @@ def run_scenario(
         system = build_system(scenario, spec)
     except (EvalError, ValueError) as exc:
         raise ScenarioError([Diagnostic(scenario.file, 1, 1, "setup", f"cannot set up the scenario: {exc}")]) from None
+    return run_steps(system, scenario, on_row=on_row, keep_rows=keep_rows)
+
+
+def run_steps(
+    system: System, scenario: Scenario, *, on_row: Callable[[ScanRow], object] | None = None, keep_rows: bool = True,
+    faults: tuple[type[Exception], ...] = (EvalError,),
+) -> ScenarioResult:
+    """The steps of ``scenario`` on ``system`` (set up by the caller): per step its ``set:``
+    writes, then its scans (the first with the step's inputs), a row per scan, ``always:``
+    checked after each scan and ``expect:`` after the last (or, with ``within:``, after the
+    first scan where it holds).  ``faults`` raised by a scan become a ScenarioError naming
+    the step; ``on_row`` and ``keep_rows`` as in :func:`run_scenario`."""
     before = system.observe()
     rows: list[ScanRow] = []
     mismatches: list[Mismatch] = []
-    visits = _visit_recorders(system, scenario)
+    visits = visit_recorders(system, scenario)
     count, last_index = 0, 0
     for step in scenario.steps:
         for axis, log in visits.items():
@@ -562,10 +571,11 @@ def run_scenario(
             inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
             try:
                 record = system.scan(inputs)
-            except EvalError as exc:
+            except faults as exc:
                 label = f"step {step.index + 1}" + (f" ({step.name})" if step.name else "")
-                raise ScenarioError([Diagnostic(scenario.file, step.line, 1, f"steps[{step.index}]", (
-                    f"{label}, scan {system.index}: the spec cannot be evaluated on these values: {exc}"))]) from None
+                what = f"the spec cannot be evaluated on these values: {exc}" if isinstance(exc, EvalError) else str(exc)
+                raise ScenarioError([Diagnostic(scenario.file, step.line, 1, f"steps[{step.index}]",
+                                                f"{label}, scan {system.index}: {what}")]) from None
             changes = tuple(
                 (obj, fld, before.get(obj, {}).get(fld), val)
                 for obj, fields in record.observations.items()
@@ -580,15 +590,20 @@ def run_scenario(
             if on_row is not None:
                 on_row(row)
             before = record.observations
-            if step.within is not None and not _step_mismatches(step, before, visits, last_index):
+            for target, fld, expected in step.always:
+                actual = before[target][fld]
+                if not expectations.holds(expected, actual):
+                    mismatches.append(Mismatch(step.index, step.name, last_index, target, fld, expected, actual, step.line))
+            if step.within is not None and not step_mismatches(step, before, visits, last_index):
                 break
-        mismatches.extend(_step_mismatches(step, before, visits, last_index))
+        mismatches.extend(step_mismatches(step, before, visits, last_index))
     return ScenarioResult(scenario, tuple(rows), tuple(mismatches), None if keep_rows else count)
 
 
-def _step_mismatches(step: Step, observed: Mapping[str, Mapping[str, object]], visits: Mapping[str, list[str]],
-                     scan: int) -> list[Mismatch]:
-    """The expectations of ``step`` that do not hold on ``observed`` (after scan ``scan``)."""
+def step_mismatches(step: Step, observed: Mapping[str, Mapping[str, object]], visits: Mapping[str, list[str]],
+                    scan: int) -> list[Mismatch]:
+    """The ``expect:`` of ``step`` that does not hold on ``observed`` (after scan ``scan``);
+    ``visits`` holds the states each axis entered during the step (:func:`visit_recorders`)."""
     out = []
     for target, fld, expected in step.expect:
         if isinstance(expected, expectations.PassesThrough):
@@ -622,7 +637,7 @@ class _VisitRecorder:
             self.log.append(str(target.id))
 
 
-def _visit_recorders(system: System, scenario: Scenario) -> dict[str, list[str]]:
+def visit_recorders(system: System, scenario: Scenario) -> dict[str, list[str]]:
     """For each axis that a ``passes_through`` names, the list its recorder appends to."""
     wanted = {t for step in scenario.steps for t, _, e in step.expect if isinstance(e, expectations.PassesThrough)}
     logs: dict[str, list[str]] = {}
@@ -693,7 +708,7 @@ def _sets(charts: Mapping[str, ir.Chart], untyped: set[str], axes: Mapping[str, 
     return tuple(out)
 
 
-def _numeric_observable(spec: ir.Spec, chart: ir.Chart | None, field: str) -> bool:
+def numeric_observable(spec: ir.Spec, chart: ir.Chart | None, field: str) -> bool:
     """Whether an observable holds a number (tolerances apply to numbers only)."""
     if chart is None:
         member = next((m for m in spec.tag_type.members if m.name == field), None)
@@ -706,7 +721,9 @@ def _numeric_observable(spec: ir.Spec, chart: ir.Chart | None, field: str) -> bo
         return False
 
 
-def _passes_through(chart: ir.Chart, value: object, parts: tuple[Any, ...], err: Any) -> expectations.PassesThrough:
+def passes_through_expectation(chart: ir.Chart, value: object, parts: tuple[Any, ...], err: Any) -> expectations.PassesThrough:
+    """The ``passes_through:`` expectation ``value`` (a list of state ids of ``chart``); a
+    problem goes to ``err(parts, message)``."""
     states = {s.id for s in chart.states}
     if not isinstance(value, list) or not value or not all(isinstance(v, str) for v in value):
         err(parts, "passes_through: expected a non-empty list of state ids")

@@ -64,7 +64,8 @@ SOURCES_SCHEMA: dict[str, Any] = {
 
 _INTERPRETATION = re.compile(r"INT-\d{3}\b")
 _PAGE = re.compile(r"\bp(\d+)(?:-(\d+))?\b")
-_SECTION_NUMBER = re.compile(r"§(\d+(?:\.\d+)*)")
+#: A section number in a locator: ``§4.2`` (group 1: ``4.2``).
+SECTION_NUMBER = re.compile(r"§(\d+(?:\.\d+)*)")
 
 
 @dataclass(frozen=True, slots=True)
@@ -196,7 +197,7 @@ def split_citations(text: str) -> list[str]:
     return out
 
 
-def _without_notes(text: str) -> str:
+def without_notes(text: str) -> str:
     """The locator with its parenthesised notes removed."""
     out, depth = [], 0
     for ch in text:
@@ -209,7 +210,8 @@ def _without_notes(text: str) -> str:
     return "".join(out)
 
 
-def _starts_with_name(locator: str, name: str) -> bool:
+def starts_with_name(locator: str, name: str) -> bool:
+    """Whether ``locator`` begins with the section name ``name`` as a whole word (any case)."""
     if not locator.lower().startswith(name.lower()):
         return False
     rest = locator[len(name):]
@@ -232,7 +234,7 @@ def citation_problem(citation: str, registry: Registry) -> str | None:
         return (f"{code!r} is not a registered source; the codes of {Path(registry.path).name} are: "
                 f"{', '.join(registry.codes)} (or cite an interpretation, INT-nnn)")
     loc = locator.strip()
-    bare = _without_notes(loc).strip()
+    bare = without_notes(loc).strip()
     if src.locator == "free":
         return None
     if not bare:
@@ -259,7 +261,7 @@ def citation_problem(citation: str, registry: Registry) -> str | None:
         return None
     if src.locator == "sections":
         names = [n for n, _ in src.sections]
-        numbers = _SECTION_NUMBER.findall(bare)
+        numbers = SECTION_NUMBER.findall(bare)
         if numbers:
             for n in numbers:
                 if f"§{n}" not in names:
@@ -267,7 +269,7 @@ def citation_problem(citation: str, registry: Registry) -> str | None:
             return None
         if bare.startswith("§"):
             return f"{code}: a section number after § is missing"
-        if not any(_starts_with_name(bare, n) for n in names if not n.startswith("§")):
+        if not any(starts_with_name(bare, n) for n in names if not n.startswith("§")):
             return f"{code} is cited by section: {bare!r} does not begin with one of its sections ({', '.join(names)})"
         return None
     if src.locator == "path":
@@ -314,7 +316,7 @@ def citations(text: str) -> list[tuple[str, str]]:
 def cited_pages(locator: str) -> list[int]:
     """The page numbers a ``pages`` locator names (ranges expanded)."""
     out: list[int] = []
-    for m in _PAGE.finditer(_without_notes(locator)):
+    for m in _PAGE.finditer(without_notes(locator)):
         a = int(m.group(1))
         b = int(m.group(2) or a)
         out.extend(range(min(a, b), max(a, b) + 1))

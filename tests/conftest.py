@@ -26,7 +26,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 try:
-    import statecharts  # noqa: F401
+    import statecharts  # noqa: F401  # only whether the project is installed
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 

@@ -52,13 +52,13 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from checker.model import ModelError  # noqa: E402
-from checker.properties import load_properties, properties_dir  # noqa: E402
-from checker.system import load_system, systems_dir  # noqa: E402
-from statecharts import ir  # noqa: E402
-from statecharts.diagnostics import InputError  # noqa: E402
-from statecharts.loader import load_spec_documents, plain_data, read_document, spec_files  # noqa: E402
-from statecharts.scenario import load_scenario_document, run_scenario, scenario_files  # noqa: E402
+from checker.model import ModelError
+from checker.properties import load_properties, properties_dir
+from checker.system import load_system, systems_dir
+from statecharts import ir
+from statecharts.diagnostics import InputError
+from statecharts.loader import load_spec_documents, plain_data, read_document, spec_files
+from statecharts.scenario import load_scenario_document, run_scenario, scenario_files
 
 #: Seconds one input may take (load and run) before it counts as a hang.
 TIME_LIMIT = 10.0

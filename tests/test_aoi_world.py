@@ -57,7 +57,7 @@ def world(**changes: dict[str, Any]) -> aoi.World:
 
 def code_after_rung_true(w: aoi.World) -> int:
     w.scan({"Sync": True})
-    return int(w.instances["Sync"].outputs["Sts_ERR"])  # type: ignore[call-overload]
+    return int(w.instances["Sync"].outputs["Sts_ERR"])
 
 
 # --------------------------------------------------------------------------- snapshot / restore / set

@@ -34,7 +34,7 @@ def test_unknown_names_are_clear_errors() -> None:
     with pytest.raises(KeyError, match="unknown instruction 'NOPE'"):
         motionchart.error_codes("NOPE")
     with pytest.raises(ValueError, match="unknown format 'gif'"):
-        motionchart.render_chart("AxisNonCIP", "gif")  # type: ignore[arg-type]  # a wrong format on purpose
+        motionchart.render_chart("AxisNonCIP", "gif")  # a wrong format on purpose
     with pytest.raises(FileNotFoundError, match=r"unknown system 'nosuch'; bundled systems: .*noncip"):
         motionchart.check("nosuch")
 

@@ -102,8 +102,8 @@ def _agree(a: AxisInstance, b: FastAxis, where: str) -> None:
 
 
 def _run_events(chart: ir.Chart, events: list[str], kwargs: dict[str, object]) -> None:
-    a = AxisInstance(chart, "A", **kwargs)  # type: ignore[arg-type]
-    b = FastAxis(chart, "A", **kwargs)  # type: ignore[arg-type]
+    a = AxisInstance(chart, "A", **kwargs)
+    b = FastAxis(chart, "A", **kwargs)
     _agree(a, b, "after start")
     for i, ev in enumerate(events):
         a.apply_event_actions(ev)

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from checker.model import Model, ModelError
 from checker.properties import load_properties
-from checker.search import SearchResult, explore, explore_interpreted, stored_bytes
+from checker.search import SearchResult, explore, explore_interpreted, stored_bytes, witness_run
 from checker.system import SystemDef, bundled_systems, load_system
 from motionchart.strategies import checking_systems
 from statecharts import ir
@@ -41,7 +41,7 @@ def _graph(r: SearchResult) -> dict[str, object]:
         "reached": {k: w.depth for k, w in r.reached.items()},
         "deadlocks": len(r.deadlocks),
         "configs": cov.configs, "fired": cov.fired, "executed": cov.executed, "errors": cov.errors,
-        "values": cov.values,
+        "values": cov.values, "checks": cov.checks,
     }
 
 
@@ -76,6 +76,36 @@ def test_two_interchangeable_axes_agree(spec: ir.Spec, base: SystemDef) -> None:
     interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False)
     assert compiled.complete and compiled.states > 20
     _same(compiled, interpreted)
+
+
+def test_coverage_witnesses_are_shortest_runs(spec: ir.Spec, base: SystemDef) -> None:
+    """The core credits every coverage item to a step of least depth: the same items
+    as the interpreter back-end, with runs of the same length, and the run replays on
+    the engine showing the item."""
+    import dataclasses
+
+    g = dataclasses.replace(base.groups[0], program=("MSO", "MDO", "MAFR"), configurations=base.groups[0].configurations[:2])
+    sysdef = dataclasses.replace(base, name="witnesses", groups=(g,), max_live_calls=1)
+    props = load_properties(spec)
+    compiled = explore(Model(spec, sysdef, props), progress=False, witnesses=True)
+    interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False, witnesses=True)
+    assert set(compiled.coverage.first) == set(interpreted.coverage.first)
+    kinds = {item[0] for item in compiled.coverage.first}
+    assert kinds == {"transition", "cell", "error", "check"}
+    for item in compiled.coverage.first:
+        run = witness_run(compiled, item)
+        assert len(run.choices) == len(witness_run(interpreted, item).choices), item
+        assert run.states[0] in compiled.initial_assignment and len(run.states) == len(run.choices)
+        # the run, scan by scan on the model's System: its last scan shows the item
+        model = compiled.model
+        model.initial(model.assignments[run.assignment])
+        for c in run.choices:
+            facts = model.step(model.choices[c])[3]
+        shown = {("transition", *f) for f in facts.fired} | {("cell", *f) for f in facts.executed}
+        shown |= {("error", *f) for f in facts.errors} | {("check", *f) for f in facts.checks}
+        assert item in shown, (item, run)
+    with pytest.raises(KeyError):
+        witness_run(compiled, ("transition", "AxisNonCIP", "no_such_transition"))
 
 
 @pytest.mark.deep

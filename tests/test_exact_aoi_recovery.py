@@ -42,7 +42,7 @@ def _world(phy: dict[str, Any], pth: dict[str, Any], sync_type: int) -> aoi.Worl
 def _outcome(world: aoi.World) -> tuple[int, int, str]:
     o = world.instances["I"].outputs
     state = "error" if o["Sts_ER"] else "complete" if o["Sts_PC"] else "in_process" if o["Sts_IP"] else "none"
-    return int(o["Sts_ERR"]), int(o["Sts_EXERR"]), state  # type: ignore[call-overload]
+    return int(o["Sts_ERR"]), int(o["Sts_EXERR"]), state
 
 
 def expected(homed: bool, distance: float, disturbance: str) -> tuple[int, int, str]:

@@ -215,7 +215,7 @@ def _execute(chart: str, state: str, variables: dict[str, object], mnemonic: str
     system.tags["t"].operands.update(operands)
     obs = system.scan(ScanInputs(rungs={"t": True})).observations
     t = obs["t"]
-    code = (int(t["ERR"]), int(t["EXERR"])) if t["ER"] else None  # type: ignore[call-overload]
+    code = (int(t["ERR"]), int(t["EXERR"])) if t["ER"] else None
     if code is None:
         assert (t["ERR"], t["EXERR"]) == (0, 0)
     return code, dict(obs["A"])

@@ -42,7 +42,7 @@ def _system(chart: str, state: str, variables: dict[str, object], program: list[
 
 def _outcome(tag: dict[str, object]) -> object:
     if tag["ER"]:
-        return (int(tag["ERR"]), int(tag["EXERR"]))  # type: ignore[call-overload]
+        return (int(tag["ERR"]), int(tag["EXERR"]))
     return DN if tag["DN"] else IN_PROCESS
 
 

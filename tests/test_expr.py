@@ -573,14 +573,14 @@ def test_dataclasses_are_frozen_slotted_and_hashable() -> None:
     e = parse_expression("x + 1")
     assert not hasattr(e, "__dict__")
     with pytest.raises(AttributeError):
-        e.text = "y"  # type: ignore[misc]
+        e.text = "y"
     assert e == parse_expression("x + 1")
     assert hash(e) == hash(parse_expression("x + 1"))
     assert "fn" not in repr(e)
     a = parse_assignment("x = 1")
     assert not hasattr(a, "__dict__")
     with pytest.raises(AttributeError):
-        a.target = "y"  # type: ignore[misc]
+        a.target = "y"
     assert a == parse_assignment("x = 1")
 
 

@@ -17,14 +17,14 @@ from statecharts.scan import ScanInputs, System
 
 
 @pytest.fixture(scope="module")
-def spec():  # type: ignore[no-untyped-def]
+def spec():
     return load_spec()
 
 
 class Run:
     """A neutral-text program on a system without axes."""
 
-    def __init__(self, spec, text: str, *, scan_ms: int = 10) -> None:  # type: ignore[no-untyped-def]
+    def __init__(self, spec, text: str, *, scan_ms: int = 10) -> None:
         self.ladder = Ladder(parse_program_text("test.txt", text, spec=spec, form="neutral"))
         self.system = System(spec, [], [], scan_ms=scan_ms, coarse_update_ms=scan_ms, ladder=self.ladder)
 
@@ -40,20 +40,20 @@ class Run:
         return self.ladder.read(path)
 
     def set(self, path: str, value: object) -> Run:
-        self.ladder.write(path, value)  # type: ignore[arg-type]
+        self.ladder.write(path, value)
         return self
 
 
 # -- bit instructions (RM003N chapter 2) ---------------------------------------------------
 
 
-def test_xic_xio_and_ote(spec) -> None:  # type: ignore[no-untyped-def]
+def test_xic_xio_and_ote(spec) -> None:
     r = Run(spec, "XIC(A)XIO(B)OTE(C);")
     assert r.scan(A=True)["C"] is True  # ch. 2 (XIC, XIO): XIC true when the bit is set, XIO when it is clear
     assert r.scan(B=True)["C"] is False  # p96: OTE clears its bit when the rung is false
 
 
-def test_prescan_clears_ote_and_keeps_otl(spec) -> None:  # type: ignore[no-untyped-def]
+def test_prescan_clears_ote_and_keeps_otl(spec) -> None:
     r = Run(spec, "XIC(A)OTE(C);XIC(A)OTL(L);")
     r.scan(A=True)
     assert r["C"] is True and r["L"] is True
@@ -62,7 +62,7 @@ def test_prescan_clears_ote_and_keeps_otl(spec) -> None:  # type: ignore[no-unty
     assert r["L"] is True  # ch. 2 (OTL): prescan does not modify the OTL's data bit
 
 
-def test_otl_otu_retain_when_the_rung_is_false(spec) -> None:  # type: ignore[no-untyped-def]
+def test_otl_otu_retain_when_the_rung_is_false(spec) -> None:
     r = Run(spec, "XIC(S)OTL(L);XIC(R)OTU(L);")
     assert r.scan(S=True)["L"] is True
     assert r.scan(S=False)["L"] is True  # ch. 2 (OTL): rung false, OTL leaves the bit
@@ -70,7 +70,7 @@ def test_otl_otu_retain_when_the_rung_is_false(spec) -> None:  # type: ignore[no
     assert r.scan(R=False)["L"] is False  # p100: rung false, OTU leaves it
 
 
-def test_ons_storage_bit(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ons_storage_bit(spec) -> None:
     r = Run(spec, "XIC(A)ONS(S)OTE(Q);")
     r.prescan()
     assert r["S"] is True  # p103: prescan sets the storage bit
@@ -81,7 +81,7 @@ def test_ons_storage_bit(spec) -> None:  # type: ignore[no-untyped-def]
     assert r.scan()["Q"] is False  # storage bit still set: rung-condition-out false
 
 
-def test_osr_and_osf(spec) -> None:  # type: ignore[no-untyped-def]
+def test_osr_and_osf(spec) -> None:
     r = Run(spec, "XIC(A)OSR(SR,QR);XIC(A)OSF(SF,QF);")
     r.prescan()
     assert (r["SR"], r["QR"], r["SF"], r["QF"]) == (True, False, False, False)  # ch. 2 OSR/OSF prescan rows (also Rockwell's OSR/OSF reference pages)
@@ -95,7 +95,7 @@ def test_osr_and_osf(spec) -> None:  # type: ignore[no-untyped-def]
     assert r.scan()["QR"] is False
 
 
-def test_branches(spec) -> None:  # type: ignore[no-untyped-def]
+def test_branches(spec) -> None:
     r = Run(spec, "XIC(A)[XIC(B)OTE(X),XIC(C)OTE(Y),]OTE(Z);")
     r.scan(A=True, B=True)
     # each leg gets the condition entering the branch; an instruction in a false leg still
@@ -113,7 +113,7 @@ def test_branches(spec) -> None:  # type: ignore[no-untyped-def]
 # -- timers and counters (RM003N chapter 3) --------------------------------------------------
 
 
-def test_ton_timing_in_scans_and_ms(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ton_timing_in_scans_and_ms(spec) -> None:
     r = Run(spec, "XIC(A)TON(T1,50,0);")
     r.prescan()
     r.scan(A=True)
@@ -130,7 +130,7 @@ def test_ton_timing_in_scans_and_ms(spec) -> None:  # type: ignore[no-untyped-de
     assert (r["T1.EN"], r["T1.DN"], r["T1.ACC"]) == (False, False, 0)  # p118: rung false resets
 
 
-def test_ton_with_a_25_ms_scan_passes_the_preset(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ton_with_a_25_ms_scan_passes_the_preset(spec) -> None:
     r = Run(spec, "XIC(A)TON(T1,60,0);", scan_ms=25)
     r.scan(A=True).scan().scan()
     assert (r["T1.ACC"], r["T1.DN"]) == (50, False)
@@ -138,7 +138,7 @@ def test_ton_with_a_25_ms_scan_passes_the_preset(spec) -> None:  # type: ignore[
     assert (r["T1.ACC"], r["T1.DN"]) == (75, True)  # p118: DN once ACC >= PRE; ACC is not clipped
 
 
-def test_ton_prescan_and_negative_preset(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ton_prescan_and_negative_preset(spec) -> None:
     r = Run(spec, "XIC(A)TON(T1,50,0);")
     r.scan(A=True).scan()
     r.prescan()
@@ -148,7 +148,7 @@ def test_ton_prescan_and_negative_preset(spec) -> None:  # type: ignore[no-untyp
         r.scan(A=True)
 
 
-def test_tof(spec) -> None:  # type: ignore[no-untyped-def]
+def test_tof(spec) -> None:
     r = Run(spec, "XIC(A)TOF(T1,20,0);")
     r.prescan()
     assert (r["T1.DN"], r["T1.ACC"]) == (False, 20)  # p122: prescan clears DN and sets ACC to PRE
@@ -162,7 +162,7 @@ def test_tof(spec) -> None:  # type: ignore[no-untyped-def]
     assert (r["T1.ACC"], r["T1.DN"], r["T1.TT"]) == (20, False, False)  # ACC >= PRE: DN cleared
 
 
-def test_rto_retains(spec) -> None:  # type: ignore[no-untyped-def]
+def test_rto_retains(spec) -> None:
     r = Run(spec, "XIC(A)RTO(T1,30,0);XIC(R)RES(T1);")
     r.scan(A=True).scan()
     assert r["T1.ACC"] == 10
@@ -176,7 +176,7 @@ def test_rto_retains(spec) -> None:  # type: ignore[no-untyped-def]
     assert (r["T1.ACC"], r["T1.DN"]) == (0, False)  # ch. 3 (RES): clears ACC and the status bits
 
 
-def test_ctu_ctd_and_res(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ctu_ctd_and_res(spec) -> None:
     r = Run(spec, "XIC(U)CTU(C1,2,0);XIC(D)CTD(C1,2,0);XIC(R)RES(C1);")
     r.prescan()
     assert r["C1.CU"] is True  # p143: prescan sets CU so the first scan does not count
@@ -192,7 +192,7 @@ def test_ctu_ctd_and_res(spec) -> None:  # type: ignore[no-untyped-def]
     assert (r["C1.ACC"], r["C1.CU"], r["C1.CD"]) == (0, False, False)
 
 
-def test_ctu_overflow_wraps_and_sets_ov(spec) -> None:  # type: ignore[no-untyped-def]
+def test_ctu_overflow_wraps_and_sets_ov(spec) -> None:
     r = Run(spec, "XIC(U)CTU(C1,0,0);")
     r.set("C1.ACC", 2**31 - 1)
     r.scan(U=True)
@@ -202,7 +202,7 @@ def test_ctu_overflow_wraps_and_sets_ov(spec) -> None:  # type: ignore[no-untype
 # -- compare, move, math ---------------------------------------------------------------------
 
 
-def test_compares_and_lim(spec) -> None:  # type: ignore[no-untyped-def]
+def test_compares_and_lim(spec) -> None:
     r = Run(spec, "EQU(A,3)OTE(E);NEQ(A,3)OTE(N);LES(A,3)OTE(L);LEQ(A,3)OTE(LE);GRT(A,3)OTE(G);GEQ(A,3)OTE(GE);"
                   "LIM(1,A,5)OTE(IN);LIM(5,A,1)OTE(OUT);")
     r.scan(A=3)
@@ -212,15 +212,15 @@ def test_compares_and_lim(spec) -> None:  # type: ignore[no-untyped-def]
     assert [r[x] for x in ("E", "G", "IN", "OUT")] == [False, True, False, True]
 
 
-def test_integer_destinations_wrap_and_reals_round_half_even(spec) -> None:  # type: ignore[no-untyped-def]
+def test_integer_destinations_wrap_and_reals_round_half_even(spec) -> None:
     r = Run(spec, "ADD(A,1,S);MOV(R,D);MOV(R2,D2);")
-    r.ladder.program.tags  # noqa: B018
+    r.ladder.program.tags  # noqa: B018  # reading the tag table must not fail
     r.scan(A=2147483647, R=2.5, R2=3.5)
     assert r["S"] == -2147483648  # DINT wraps around (two's complement)
     assert (r["D"], r["D2"]) == (2, 4)  # REAL to integer: nearest, halves to even (INT-P07)
 
 
-def test_div_mod_neg_and_division_by_zero(spec) -> None:  # type: ignore[no-untyped-def]
+def test_div_mod_neg_and_division_by_zero(spec) -> None:
     r = Run(spec, "DIV(A,B,Q);MOD(A,B,M);NEG(A,N);")
     r.scan(A=-7, B=2)
     assert (r["Q"], r["M"], r["N"]) == (-3, -1, 7)  # integers: the quotient truncates; MOD = A - TRN(A/B)*B (p281)
@@ -229,7 +229,7 @@ def test_div_mod_neg_and_division_by_zero(spec) -> None:  # type: ignore[no-unty
     assert [f.code for f in r.ladder.minor_faults] == [4, 4]
 
 
-def test_cpt_and_cmp_expressions(spec) -> None:  # type: ignore[no-untyped-def]
+def test_cpt_and_cmp_expressions(spec) -> None:
     r = Run(spec, "CPT(X,(A+B)*2-A MOD 3);CMP(ABS(A-B)>2 AND NOT F)OTE(C);CPT(Y,16#F0 OR 2#0011);")
     r.scan(A=5, B=1)
     assert r["X"] == 10  # (5+1)*2 - (5 MOD 3) with MOD binding tighter than -
@@ -239,7 +239,7 @@ def test_cpt_and_cmp_expressions(spec) -> None:  # type: ignore[no-untyped-def]
     assert r["C"] is False
 
 
-def test_btd_clr_cop(spec) -> None:  # type: ignore[no-untyped-def]
+def test_btd_clr_cop(spec) -> None:
     r = Run(spec, "BTD(S,4,D,0,4);XIC(K)CLR(S);XIC(K)COP(Arr[1],Dst[0],2);MOV(Arr[3],Dst[3]);")
     r.scan(S=0xA5)
     assert r["D"] == 0xA  # bits 4..7 of the source into bits 0..3 of the destination
@@ -248,7 +248,7 @@ def test_btd_clr_cop(spec) -> None:  # type: ignore[no-untyped-def]
     assert (r["S"], r["Dst[0]"], r["Dst[1]"]) == (0, 11, 22)
 
 
-def test_bit_of_word_and_computed_subscripts(spec) -> None:  # type: ignore[no-untyped-def]
+def test_bit_of_word_and_computed_subscripts(spec) -> None:
     r = Run(spec, "XIC(Flags.3)OTE(B3);XIC(G)OTE(Bits[I]);AFI()OTE(Bits[3]);MOV(Arr[I],V);MOV(0,Arr[3]);MOV(9,Arr[2]);")
     r.scan(Flags=8, G=True, I=2)
     assert (r["B3"], r["Bits[2]"]) == (True, True)
@@ -258,7 +258,7 @@ def test_bit_of_word_and_computed_subscripts(spec) -> None:  # type: ignore[no-u
         r.scan(I=7)
 
 
-def test_afi_nop_jsr_ret(spec) -> None:  # type: ignore[no-untyped-def]
+def test_afi_nop_jsr_ret(spec) -> None:
     text = ("AFI()OTE(X);NOP()OTE(Y);XIC(CALL)JSR(Sub,0);\n"
             "ROUTINE Sub\nOTE(InSub);XIC(EARLY)RET();OTE(AfterRet);")
     r = Run(spec, text)

@@ -343,7 +343,7 @@ def make_law_machine(
             arguments = {"rung": st.booleans(), "operands": operand_sets(ins)}
         else:
 
-            def set_rung(self: Laws, rung: bool, t: str = t) -> None:  # type: ignore[misc]
+            def set_rung(self: Laws, rung: bool, t: str = t) -> None:
                 self._scan(ScanInputs(rungs={t: rung}))
 
             arguments = {"rung": st.booleans()}
@@ -499,7 +499,7 @@ def test_laws_catch_servo_control_without_drive_enable() -> None:
 
 def servo_on_ignored_in_axis_ready(spec: ir.Spec, chart: ir.Chart) -> ir.Chart:
     """Broken chart: the axis ignores MSO's request (its event) in Axis Ready."""
-    event = spec.instruction("MSO").request.event  # type: ignore[union-attr]
+    event = spec.instruction("MSO").request.event
     ready = [s.id for s in chart.states if s.value == AXIS_READY]
     kept = tuple(t for t in chart.transitions if not (t.event == event and t.source in ready))
     return dataclasses.replace(chart, transitions=kept)

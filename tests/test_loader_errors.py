@@ -68,11 +68,11 @@ def _parse_cache() -> Iterator[None]:
             _PARSED[data] = real(path, errors, what=what)
         return _PARSED[data]
 
-    loader.read_yaml = cached  # type: ignore[assignment]
+    loader.read_yaml = cached
     try:
         yield
     finally:
-        loader.read_yaml = real  # type: ignore[assignment]
+        loader.read_yaml = real
 
 
 @pytest.fixture(autouse=True, scope="module")
@@ -512,7 +512,7 @@ def _no_system() -> Iterator[None]:
         calls.append(args)
         raise _Executed(f"spec text was executed: os.system{args!r}")
 
-    os.system = refuse  # type: ignore[assignment]
+    os.system = refuse
     try:
         yield
     finally:

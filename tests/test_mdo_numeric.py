@@ -34,7 +34,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 try:
-    import statecharts  # noqa: F401
+    import statecharts  # noqa: F401  # only whether the project is installed
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 

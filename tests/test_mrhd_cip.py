@@ -21,7 +21,7 @@ from hypothesis import Phase, find, given, settings
 from hypothesis import strategies as st
 
 try:
-    import statecharts  # noqa: F401
+    import statecharts  # noqa: F401  # only whether the project is installed
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -127,7 +127,7 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
     # the exploration meets the interesting cases often enough
     lead = [("event", run["pre_event"], True)] if run.get("pre_event") else []
     lead += [("rung", "mrhd", True)] if run.get("lead") else []
-    for kind, name, value in [*lead, *run["steps"]]:  # type: ignore[misc]
+    for kind, name, value in [*lead, *run["steps"]]:
         events: tuple[EnvironmentEvent, ...] = ()
         if kind == "rung":
             rungs[name] = value
@@ -220,13 +220,13 @@ def _scenario_outcomes(runs: ScenarioRuns) -> tuple[set[int], set[tuple[int, int
             obs = row.record.observations
             for a in scenario.axes:
                 if a.chart == "AxisCIP":
-                    statuses.add(int(obs[a.name]["HookupTestStatus"]))  # type: ignore[call-overload]
+                    statuses.add(int(obs[a.name]["HookupTestStatus"]))
             for tag, axis in axis_of.items():
                 t = obs[tag]
                 if t["ER"]:
-                    errors.add((int(t["ERR"]), int(t["EXERR"])))  # type: ignore[call-overload]
+                    errors.add((int(t["ERR"]), int(t["EXERR"])))
                     if not er_before[tag]:
-                        refusals.add((str(obs[axis]["state"]), int(t["ERR"]), int(t["EXERR"])))  # type: ignore[call-overload]
+                        refusals.add((str(obs[axis]["state"]), int(t["ERR"]), int(t["EXERR"])))
                 er_before[tag] = bool(t["ER"])
     return statuses, errors, refusals
 

@@ -22,7 +22,7 @@ from hypothesis import find, given, settings
 from hypothesis import strategies as st
 
 try:
-    import statecharts  # noqa: F401
+    import statecharts  # noqa: F401  # only whether the project is installed
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -92,7 +92,7 @@ def _run(run: dict[str, object], check_law: bool = False) -> list[dict[str, dict
     system.tags["mrhd"].operands.update({"DiagnosticTest": run["test"]})
     rungs = dict.fromkeys(TAGS, False)
     seen = []
-    for kind, name, value in run["steps"]:  # type: ignore[attr-defined]
+    for kind, name, value in run["steps"]:
         events: tuple[EnvironmentEvent, ...] = ()
         if kind == "rung":
             rungs[name] = value

@@ -19,8 +19,8 @@ SEQUENCE = load_program(EXAMPLES / "state_machine.rll", spec=SPEC)
 AXES = ("X_axis", "Y_axis", "Z_axis")
 
 
-def recovers(starts: dict[str, object], events: list[tuple[int, str, str]] = ()) -> bool:  # type: ignore[assignment]
-    c = Controller(RECOVERY, axes=starts, spec=SPEC, tags={"STATE": 1, "NEXTSTATE": 1})  # type: ignore[arg-type]
+def recovers(starts: dict[str, object], events: list[tuple[int, str, str]] = ()) -> bool:
+    c = Controller(RECOVERY, axes=starts, spec=SPEC, tags={"STATE": 1, "NEXTSTATE": 1})
     c.scan().scan(NEXTSTATE=9)
     for k in range(12):
         c.scan(events=tuple((a, e) for s, a, e in events if s == k))

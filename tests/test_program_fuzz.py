@@ -33,7 +33,7 @@ def _load(tmp_path: Path, name: str, text: str) -> None:
 
 @settings(max_examples=200)  # cheap examples; the mutations are many
 @given(st.sampled_from(sorted(SOURCES)), st.data())
-def test_mutated_programs_give_a_program_or_located_errors(tmp_path_factory, name: str, data) -> None:  # type: ignore[no-untyped-def]
+def test_mutated_programs_give_a_program_or_located_errors(tmp_path_factory, name: str, data) -> None:
     text = SOURCES[name]
     for _ in range(data.draw(st.integers(1, 4))):
         at = data.draw(st.integers(0, len(text)))
@@ -45,5 +45,5 @@ def test_mutated_programs_give_a_program_or_located_errors(tmp_path_factory, nam
 
 @settings(max_examples=200)
 @given(st.sampled_from([".rll", ".txt"]), st.text(ALPHABET, max_size=200))
-def test_random_rung_text_gives_a_program_or_located_errors(tmp_path_factory, suffix: str, text: str) -> None:  # type: ignore[no-untyped-def]
+def test_random_rung_text_gives_a_program_or_located_errors(tmp_path_factory, suffix: str, text: str) -> None:
     _load(tmp_path_factory.mktemp("fuzz"), "p" + suffix, text)

@@ -20,11 +20,11 @@ LOCATED = re.compile(r"^[^:]+:\d+:\d+: rung \d+: instruction \d+: ")
 
 
 @pytest.fixture(scope="module")
-def spec():  # type: ignore[no-untyped-def]
+def spec():
     return load_spec()
 
 
-def test_the_three_forms_load_to_the_same_program(spec) -> None:  # type: ignore[no-untyped-def]
+def test_the_three_forms_load_to_the_same_program(spec) -> None:
     ascii_ = load_program(EXAMPLES / "state_machine.rll", spec=spec)
     neutral = load_program(EXAMPLES / "state_machine.txt", spec=spec)
     l5x = load_program(EXAMPLES / "state_machine.L5X", spec=spec)
@@ -40,7 +40,7 @@ def test_the_three_forms_load_to_the_same_program(spec) -> None:  # type: ignore
     assert inferred - declared == {("Axis1", AXIS_UNTYPED, (), ())}
 
 
-def test_the_three_forms_run_to_the_same_observations(spec) -> None:  # type: ignore[no-untyped-def]
+def test_the_three_forms_run_to_the_same_observations(spec) -> None:
     tables = []
     for name in ("state_machine_ascii.yaml", "state_machine_neutral.yaml", "state_machine_l5x.yaml"):
         result = run_scenario(load_scenario(EXAMPLES / name, spec), spec)
@@ -50,7 +50,7 @@ def test_the_three_forms_run_to_the_same_observations(spec) -> None:  # type: ig
     assert len(tables[0]) == 21
 
 
-def _errors(tmp_path: Path, name: str, text: str | bytes, spec) -> list[str]:  # type: ignore[no-untyped-def]
+def _errors(tmp_path: Path, name: str, text: str | bytes, spec) -> list[str]:
     path = tmp_path / name
     if isinstance(text, bytes):
         path.write_bytes(text)
@@ -61,7 +61,7 @@ def _errors(tmp_path: Path, name: str, text: str | bytes, spec) -> list[str]:  #
     return [str(d) for d in info.value.diagnostics]
 
 
-def test_unknown_mnemonic_and_wrong_operand_count(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_unknown_mnemonic_and_wrong_operand_count(tmp_path: Path, spec) -> None:
     errors = _errors(tmp_path, "p.txt", "XIC(A)FOO(B)OTE(C);\nXIC(A,B)OTE(C);\nXIC(A)MAM(X,Y,1,2,3,4,5,6,7,8,9);\n", spec)
     assert len(errors) == 3  # every problem of the file in one pass
     assert all(LOCATED.match(e) for e in errors)
@@ -73,7 +73,7 @@ def test_unknown_mnemonic_and_wrong_operand_count(tmp_path: Path, spec) -> None:
     assert "Logix instruction FAL is not supported" in ascii_errors[1]
 
 
-def test_unbalanced_and_deeply_nested_branches(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_unbalanced_and_deeply_nested_branches(tmp_path: Path, spec) -> None:
     errors = _errors(tmp_path, "p.rll", "XIC A BST XIC B NXB XIC C OTE D\nXIC A BND OTE B\n", spec)
     assert "1:7: rung 0: unbalanced branch" in errors[0]
     assert "2:7: rung 1: a branch ends (BND or ']') that was never started" in errors[1]
@@ -82,7 +82,7 @@ def test_unbalanced_and_deeply_nested_branches(tmp_path: Path, spec) -> None:  #
     assert errors == [f"{tmp_path}/deep.txt:1:33: rung 0: branches nested deeper than 32 levels"]
 
 
-def test_l5x_undefined_tag_and_st_routine(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_l5x_undefined_tag_and_st_routine(tmp_path: Path, spec) -> None:
     text = (EXAMPLES / "state_machine.L5X").read_text(encoding="utf-8")
     bad = text.replace("XIC(START_PB)", "XIC(START_BUTTON)").replace(
         "</Routines>", '<Routine Name="Calc" Type="ST"><STContent><Line Number="0"><![CDATA[x := 1;]]></Line></STContent></Routine>\n</Routines>')
@@ -96,7 +96,7 @@ def test_l5x_undefined_tag_and_st_routine(tmp_path: Path, spec) -> None:  # type
                       f"declared neither in the controller's tags nor in program 'MainProgram'"]
 
 
-def test_xml_bomb_is_refused(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_xml_bomb_is_refused(tmp_path: Path, spec) -> None:
     bomb = ('<?xml version="1.0"?>\n<!DOCTYPE lolz [\n <!ENTITY lol "lol">\n'
             + "".join(f' <!ENTITY lol{i} "{("&lol%s;" % (i - 1 if i > 1 else "")) * 10}">\n' for i in range(1, 10))
             + ']>\n<RSLogix5000Content>&lol9;</RSLogix5000Content>\n')
@@ -106,12 +106,12 @@ def test_xml_bomb_is_refused(tmp_path: Path, spec) -> None:  # type: ignore[no-u
     assert "not well-formed XML" in errors[0]
 
 
-def test_ten_megabyte_file_is_refused(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_ten_megabyte_file_is_refused(tmp_path: Path, spec) -> None:
     errors = _errors(tmp_path, "big.rll", b"XIC A OTE B\n" * 900_000, spec)
     assert errors == [f"{tmp_path}/big.rll:1:1: program is larger than 5000000 bytes (10800000 bytes)"]
 
 
-def test_not_utf8_and_not_a_regular_file(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_not_utf8_and_not_a_regular_file(tmp_path: Path, spec) -> None:
     errors = _errors(tmp_path, "bin.rll", b"XIC A\nOTE \xff\n", spec)
     assert errors[0].startswith(f"{tmp_path}/bin.rll:2:5: program is not UTF-8 text")
     (tmp_path / "dir.rll").mkdir()
@@ -123,7 +123,7 @@ def test_not_utf8_and_not_a_regular_file(tmp_path: Path, spec) -> None:  # type:
         load_program(fifo, spec=spec)
 
 
-def test_inference_conflicts_are_located(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_inference_conflicts_are_located(tmp_path: Path, spec) -> None:
     errors = _errors(tmp_path, "p.txt", "XIC(A)MOV(1,A);\nXIC(T.DN)OTE(B);\n", spec)
     assert "tag 'A' is used both as a BOOL" in errors[0]
     assert ":2:1: rung 1: instruction 1: cannot infer the data type of 'T'" in errors[1]
@@ -143,7 +143,7 @@ def test_validate_reports_a_bad_program(tmp_path: Path, capsys: pytest.CaptureFi
     assert "rung 0: instruction 2: motion instruction MAH is not modelled yet" in err
 
 
-def test_l5x_alias_tags_and_unmodelled_types(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_l5x_alias_tags_and_unmodelled_types(tmp_path: Path, spec) -> None:
     text = (EXAMPLES / "state_machine.L5X").read_text(encoding="utf-8")
     aliased = text.replace("<Tags>\n", '<Tags>\n<Tag Name="Start" TagType="Alias" AliasFor="START_PB"></Tag>\n'
                            '<Tag Name="Ons0" TagType="Alias" AliasFor="Ons[0]"></Tag>\n'

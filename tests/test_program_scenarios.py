@@ -15,11 +15,11 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "programs"
 
 
 @pytest.fixture(scope="module")
-def spec():  # type: ignore[no-untyped-def]
+def spec():
     return load_spec()
 
 
-def test_all_axes_running_reach_state_1_in_four_scans(spec) -> None:  # type: ignore[no-untyped-def]
+def test_all_axes_running_reach_state_1_in_four_scans(spec) -> None:
     # The count, by hand from docs/programs.md: scan k (first in state 9) executes the MSFs, whose
     # requests take the Running axes to Stopping at that scan's coarse update (001 Running, Disable);
     # Stopping lasts one coarse update (INT-035, StoppingUpdates 1), so the MSFs are DN after scan k+1;
@@ -33,7 +33,7 @@ def test_all_axes_running_reach_state_1_in_four_scans(spec) -> None:  # type: ig
     assert reached - first_in_9 == 3  # NEXTSTATE = 1 in the fourth scan in state 9
 
 
-def test_one_axis_in_shutdown_never_reaches_state_1(spec) -> None:  # type: ignore[no-untyped-def]
+def test_one_axis_in_shutdown_never_reaches_state_1(spec) -> None:
     scenario = load_scenario(EXAMPLES / "fault_recovery_one_shutdown.yaml", spec)
     result = run_scenario(scenario, spec)
     assert result.passed, [str(m) for m in result.mismatches]
@@ -41,7 +41,7 @@ def test_one_axis_in_shutdown_never_reaches_state_1(spec) -> None:  # type: igno
     assert all(r.record.observations["NEXTSTATE"][""] == 9 for r in result.rows[1:])
     # the scenario says so: its `always` fails if the routine leaves state 9
     step = scenario.steps[-1]
-    assert ("NEXTSTATE", "", 9) in step.always  # type: ignore[attr-defined]
+    assert ("NEXTSTATE", "", 9) in step.always
 
 
 def test_simulate_prints_program_tags(capsys: pytest.CaptureFixture[str]) -> None:
@@ -59,7 +59,7 @@ def _write(tmp_path: Path, text: str) -> Path:
     return path
 
 
-def test_program_scenario_errors_are_located(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_program_scenario_errors_are_located(tmp_path: Path, spec) -> None:
     path = _write(tmp_path, """format: motionchart-scenario/1
 name: bad
 setup:
@@ -81,7 +81,7 @@ steps:
     assert "'GHOST' is not a program tag, motion tag or axis" in text
 
 
-def test_program_scenario_runs_a_rung_file(tmp_path: Path, spec) -> None:  # type: ignore[no-untyped-def]
+def test_program_scenario_runs_a_rung_file(tmp_path: Path, spec) -> None:
     path = _write(tmp_path, """format: motionchart-scenario/1
 name: start
 setup:

@@ -140,12 +140,65 @@ def test_dot_has_no_addresses_and_no_stray_anchor(spec: ir.Spec) -> None:
 
 def test_dot_shows_guards_and_actions_on_edges(spec: ir.Spec) -> None:
     chart = spec.chart("AxisNonCIP")
-    dot = chart_dot(chart)
+    dot = chart_dot(chart, labels="full")
     for t in chart.transitions:
         if t.target is not None and t.guard is not None:
             assert t.guard.text.split()[0] in dot
         if t.target is None:  # targetless transitions are listed inside their state
             assert f"/ {t.actions[0].target} =" in dot
+
+
+def test_label_levels(spec: ir.Spec) -> None:
+    chart = spec.chart("AxisNonCIP")
+    full, guards, events = (chart_dot(chart, labels=level) for level in ("full", "guards", "events"))
+    acts = [a.text for t in chart.transitions if t.target is not None for a in t.actions]
+    guarded = [t for t in chart.transitions if t.target is not None and t.guard is not None and t.event]
+    assert any(a.split(" = ")[0] + " =" in full for a in acts)
+    # guards: event [guard] on the edges, no actions
+    assert all(t.guard is not None and t.guard.text.split()[0] in guards for t in guarded)
+    assert "/ TestStatus = " not in guards and "/ TestStatus = " in full
+    # events: the events alone (the guards of evented transitions are gone)
+    assert all(t.event in events for t in guarded)
+    assert len(events) < len(guards) < len(full)
+    with pytest.raises(ValueError, match="label level"):
+        chart_dot(chart, labels="everything")
+
+
+def test_large_chart_overview_and_parts(spec: ir.Spec) -> None:
+    from statecharts.render.views import is_split, leaf_composites, view_names
+
+    cip = spec.chart("AxisCIP")
+    assert is_split(cip) and not is_split(spec.chart("AxisNonCIP"))
+    parts = {s.id for s in leaf_composites(cip)}
+    # the CIP chart's four composites of simple states
+    assert parts == {"Connecting", "SelfTest", "Standby", "PowerActive"}
+    assert view_names(cip) == ("whole", "overview", "Connecting", "SelfTest", "Standby", "PowerActive")
+    ov = chart_dot(cip, part="overview")
+    # collapsed: a box per composite, its states listed in it, not drawn as nodes
+    for box in parts:
+        assert re.search(rf"^\s*{box} \[", ov, re.M)
+    assert not re.search(r"^\s*Running \[", ov, re.M) and "Starting, Running, Testing" in ov
+    part = chart_dot(cip, part="PowerActive")
+    assert "subgraph cluster_PowerActive" in part and re.search(r"^\s*Running \[", part, re.M)
+    # the states outside the part are grey stubs, the other composites collapsed
+    assert re.search(r"^\s*Standby \[.*dashed", part, re.M) and not re.search(r"^\s*Stopped \[", part, re.M)
+    with pytest.raises(KeyError):
+        chart_dot(cip, part="Nowhere")
+
+
+def test_long_flowchart_is_split_in_parts(spec: ir.Spec) -> None:
+    from statecharts.render.flowchart import PART_CHECKS, flowchart_part_names
+
+    mds = spec.instruction("MDS")
+    names = flowchart_part_names(spec, mds)
+    assert len(mds.checks) + len(mds.aborts) > PART_CHECKS and names[0] == "whole" and len(names) >= 3
+    seen = []
+    for name in names[1:]:
+        dot = instruction_dot(spec, mds, part=name)
+        seen += [c.id for c in mds.checks if f"check_{c.id} [" in dot]
+    assert seen == [c.id for c in mds.checks]  # every check once, in order
+    assert "Continued in part 2" in instruction_dot(spec, mds, part="part1")
+    assert flowchart_part_names(spec, spec.instruction("MAFR")) == ("whole",)
 
 
 def test_fixture_dot_draws_every_construct(demo_spec: ir.Spec) -> None:
@@ -377,7 +430,8 @@ def test_svgs_are_reused_while_their_dot_is_unchanged(spec: ir.Spec, tmp_path: P
 
     files = build(spec, [], tmp_path, render_svg=fake).files
     n = len(calls)
-    assert n == len(spec.charts) + len(spec.instructions)
+    # one SVG per DOT: every chart and instruction, and the views and parts of the large ones
+    assert n == sum(1 for rel in files if rel.endswith(".dot") and "/" in rel) > len(spec.charts) + len(spec.instructions)
     for rel, data in files.items():
         (tmp_path / rel).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / rel).write_bytes(data)
@@ -435,7 +489,7 @@ def test_every_interpretation_page_entry_names_its_users(spec: ir.Spec) -> None:
 
 @pytest.mark.parametrize("module", [statecharts.api, statecharts.render])
 def test_module_examples_run(module: object) -> None:
-    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)  # type: ignore[arg-type]
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0 and result.failed == 0
 
 

@@ -106,7 +106,7 @@ def test_spec_check_order_is_the_documented_order() -> None:
 def test_check_table_lists_the_codes_in_spec_and_documented_order(doc: AoiDocument, page: str) -> None:
     rows = table_rows(section(page, "Checks, in the order they run"))
     assert [r[0] for r in rows] == [str(n) for n in range(1, len(CHECK_ORDER) + 1)]
-    codes = [int(re.match(r"\[(\d+)\]", r[2]).group(1)) for r in rows]  # type: ignore[union-attr]
+    codes = [int(re.match(r"\[(\d+)\]", r[2]).group(1)) for r in rows]
     assert codes == [c.code for c in bundled_aoi().checks]
     assert codes == CHECK_ORDER
     for r, code in zip(rows, codes):
@@ -120,7 +120,7 @@ def test_check_table_lists_the_codes_in_spec_and_documented_order(doc: AoiDocume
 
 def test_every_error_code_appears_in_the_page(doc: AoiDocument, page: str) -> None:
     rows = table_rows(section(page, "Error codes"))
-    listed = [int(re.search(r"</a>(\d+)$", r[0]).group(1)) for r in rows]  # type: ignore[union-attr]
+    listed = [int(re.search(r"</a>(\d+)$", r[0]).group(1)) for r in rows]
     assert listed == ALL_CODES == sorted(e.code for e in doc.errors)
     for r in rows:
         assert r[1] and r[2] != "— (reported by nothing)" and r[3] != "—", r
@@ -140,7 +140,7 @@ def test_page_lists_inputs_outputs_and_recovery(doc: AoiDocument, page: str) -> 
     assert inputs["Ref_AxisPhy"][2] == "`AXIS_CIP_DRIVE`" and inputs["Set_Speed"][1] == "REAL"
     outputs = [r[0].strip("`") for r in table_rows(section(page, "Outputs (status members)"))]
     assert {"Sts_ER", "Sts_ERR", "Sts_EXERR", "Sts_IP", "Sts_PC"} <= set(outputs)
-    states = [re.search(r"`(\w+)`", r[0]).group(1) for r in table_rows(section(page, "States"))]  # type: ignore[union-attr]
+    states = [re.search(r"`(\w+)`", r[0]).group(1) for r in table_rows(section(page, "States"))]
     assert states == [s.state.id for s in doc.states]
     transitions = table_rows(section(page, "Transitions"))
     assert [(r[1].strip("`"), r[2].strip("`")) for r in transitions] == [(t.source, t.target) for t in doc.transitions]
@@ -154,7 +154,7 @@ def test_page_lists_sub_instructions_with_ordered_err_codes(page: str) -> None:
         assert m, mnemonic
         block = section(subs[m.start():], subs[m.start():].splitlines()[0].lstrip("# "))
         rows = table_rows(block)
-        assert [int(re.match(r"\[?(\d+)", r[2]).group(1)) for r in rows] == errs, mnemonic  # type: ignore[union-attr]
+        assert [int(re.match(r"\[?(\d+)", r[2]).group(1)) for r in rows] == errs, mnemonic
         assert [r[0] for r in rows] == [str(n) for n in range(1, len(errs) + 1)]
     # names from the main spec's error catalog, linked to it
     assert "[87](../error-codes.md#err-87)" in subs
@@ -246,7 +246,7 @@ def test_recovery_chart_shows_every_state_and_transition(doc: AoiDocument) -> No
 
 def test_build_writes_the_aoi_artefacts(tmp_path: Path, doc: AoiDocument) -> None:
     spec = load_spec()
-    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731 - no Graphviz needed here
+    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
     files = build(spec, [], tmp_path, render_svg=fake, aoi=[doc]).files
     for name in (f"aoi/{AOI_ID}.md", f"flowcharts/{AOI_ID}.dot", f"flowcharts/{AOI_ID}.mmd",
                  f"flowcharts/{AOI_ID}.svg", f"diagrams/{AOI_ID}_recovery.dot",

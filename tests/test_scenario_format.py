@@ -399,7 +399,7 @@ LOADER_KEYS = {
 def _node(pointer: str) -> dict[str, object]:
     node: object = SCENARIO_SCHEMA
     for part in filter(None, pointer.split("/")):
-        node = node[int(part)] if isinstance(node, list) else node[part]  # type: ignore[index]
+        node = node[int(part)] if isinstance(node, list) else node[part]
     assert isinstance(node, dict)
     return node
 

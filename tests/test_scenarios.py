@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 try:
-    import statecharts  # noqa: F401
+    import statecharts  # noqa: F401  # only whether the project is installed
 except ModuleNotFoundError:  # running without the project installed
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 

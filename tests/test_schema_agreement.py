@@ -3,7 +3,7 @@
 * Each node kind's keys are one constant of :mod:`statecharts.loader` (``NODE_KEYS``);
   each equals the ``properties`` of the same node in ``spec/schema/spec.schema.json``,
   and every object node of the schema belongs to some kind.
-* Loading the bundled spec reads exactly those keys (the loader's ``_Node`` refuses an
+* Loading the bundled spec reads exactly those keys (the loader's ``Node`` refuses an
   undeclared key; here every read is recorded).
 * Every key lands in a field of the IR record built from it, or is listed below with
   the reason it does not.
@@ -41,6 +41,8 @@ SCHEMA_NODES: dict[str, tuple[str, ...]] = {
     "state": ("/$defs/state",),
     "transition": ("/properties/chart/properties/transitions/items",),
     "variable": ("/properties/chart/properties/variables/items", "/properties/tag_type/properties/internal/items"),
+    "value": ("/properties/chart/properties/variables/items/properties/values/items",
+              "/properties/tag_type/properties/internal/items/properties/values/items"),
     "event": ("/properties/chart/properties/events/items",),
     "instruction": ("/properties/instruction",),
     "operand": ("/properties/instruction/properties/operands/items",),
@@ -117,20 +119,20 @@ def test_loader_constants_are_module_frozensets() -> None:
 
 def test_loading_reads_exactly_the_declared_keys(monkeypatch: pytest.MonkeyPatch) -> None:
     reads: dict[str, set[str]] = {kind: set() for kind in NODE_KEYS}
-    real_declared = loader._Node._declared
+    real_declared = loader.Node._declared
 
-    def record(self: loader._Node, key: str) -> None:
+    def record(self: loader.Node, key: str) -> None:
         real_declared(self, key)  # an undeclared key fails here
         reads[self.kind].add(key)
 
-    monkeypatch.setattr(loader._Node, "_declared", record)
+    monkeypatch.setattr(loader.Node, "_declared", record)
     load_spec()
     unread = {kind: sorted(NODE_KEYS[kind] - keys) for kind, keys in reads.items() if NODE_KEYS[kind] - keys}
     assert not unread, f"keys the schema accepts but the loader never reads: {unread}"
 
 
 def test_undeclared_key_is_refused() -> None:
-    node = loader._Node({"id": "x", "zz": 1}, "chart")
+    node = loader.Node({"id": "x", "zz": 1}, "chart")
     assert node["id"] == "x"
     with pytest.raises(AssertionError, match="'zz' of a chart"):
         node.get("zz")
@@ -145,6 +147,7 @@ IR_RECORDS: dict[str, tuple[type, dict[str, str]]] = {
     "state": (ir.State, {**_PROV, "history": "history_type", "states": "children"}),
     "transition": (ir.Transition, {**_PROV, "from": "source", "to": "target", "guard": "guard"}),
     "variable": (ir.Variable, {**_PROV, "range": "domain"}),
+    "value": (ir.DocumentedValue, _PROV),
     "event": (ir.Event, _PROV),
     "instruction": (ir.Instruction, {**_PROV, "execution_table": "table", "done": "done_when"}),
     "operand": (ir.Operand, _PROV),

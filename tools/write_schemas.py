@@ -23,6 +23,10 @@ variable = {
         "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
         "initial": SCALAR, "description": {"type": "string"},
         "writable": {"type": "boolean", "description": "A program may write this attribute (SSV): a scenario step may `set:` it."},
+        "values": {"type": "array", "description": "Documented values (status codes): what each means and where it is documented.",
+                   "items": {"type": "object", "additionalProperties": False, "required": ["value", "meaning", "source"],
+                             "properties": {"value": SCALAR, "meaning": {"type": "string", "minLength": 1},
+                                            "confidence": CONF, "source": SOURCE, "interpretation": INTERP}}},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -409,14 +413,14 @@ SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
 # the add-on instruction's own languages (docs/aoi.md); defined beside their loader
-from statecharts.aoi import AOI_SCHEMA, SUB_SCHEMA  # noqa: E402
-from statecharts.aoi import SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA  # noqa: E402
+from statecharts.aoi import AOI_SCHEMA, SUB_SCHEMA
+from statecharts.aoi import SCENARIO_SCHEMA as AOI_SCENARIO_SCHEMA
 
 SCHEMAS.update({"aoi.schema.json": AOI_SCHEMA, "subinstruction.schema.json": SUB_SCHEMA,
                 "aoi-scenario.schema.json": AOI_SCENARIO_SCHEMA})
 
 # the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
-from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS  # noqa: E402
+from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS
 
 SCHEMAS.update(CONFORMANCE_SCHEMAS)
 

@@ -281,9 +281,9 @@ class Ladder:
             head, _, member = path.rpartition(".")
             if head in system.tags:
                 inst = system.tags[head]
-                return inst.flags if member == "FLAGS" else inst.values[member]  # type: ignore[return-value]
+                return inst.flags if member == "FLAGS" else inst.values[member]  # type: ignore[return-value]  # motion tag members are BOOL or integers
             if head in system.axes:
-                return system.axes[head].observe()[member]  # type: ignore[return-value]
+                return system.axes[head].observe()[member]  # type: ignore[return-value]  # program-readable axis values are scalars
         slot, _t, bit = self.slot(path)
         v = self.db.values[slot]
         if bit is not None:
@@ -321,7 +321,9 @@ def _resolve_static(db: TagDatabase, ref: Reference) -> tuple[int, str, int | No
     if layout.dimensions:
         if not sels or not isinstance(sels[0], Index):
             return f"{ref} is a whole array {ref.base}{list(layout.dimensions)}; give a subscript"
-        subs = [int(x.value) for x in sels.pop(0).subscripts if isinstance(x, Number)]  # type: ignore[union-attr]
+        index = sels.pop(0)
+        assert isinstance(index, Index)
+        subs = [int(x.value) for x in index.subscripts if isinstance(x, Number)]
         if len(subs) != len(layout.dimensions):
             return f"{ref}: {ref.base} has {len(layout.dimensions)} dimension(s)"
         e = layout.element_index(subs)
@@ -509,8 +511,9 @@ class _Compiler:
                 self.problem(ins, f"{ref}: {ref.base} has {len(layout.dimensions)} dimension(s), "
                                   f"not {len(index.subscripts)}")
                 return None
-            if all(isinstance(s, Number) for s in index.subscripts):
-                e = layout.element_index([int(s.value) for s in index.subscripts])  # type: ignore[union-attr]
+            immediate = [int(s.value) for s in index.subscripts if isinstance(s, Number)]
+            if len(immediate) == len(index.subscripts):
+                e = layout.element_index(immediate)
                 if e is None:
                     self.problem(ins, f"{ref}: subscript out of range for {ref.base}{list(layout.dimensions)}")
                     return None
@@ -631,7 +634,7 @@ class _Compiler:
             if member == "FLAGS":
                 return lambda: inst.flags
             vals = inst.values
-            return lambda: vals[member]  # type: ignore[return-value]
+            return lambda: vals[member]  # type: ignore[return-value]  # motion tag members are BOOL or integers
         addr = self.address(ins, Reference(ref.base, tuple(sels[:-1])))
         if addr is None:
             return None
@@ -654,7 +657,7 @@ class _Compiler:
             inst2 = tags.get(name2)
             if inst2 is None:
                 return values[s + member_slot[0]]
-            return inst2.flags if member == "FLAGS" else inst2.values[member]  # type: ignore[return-value]
+            return inst2.flags if member == "FLAGS" else inst2.values[member]  # type: ignore[return-value]  # motion tag members are BOOL or integers
         return read_dynamic
 
     def axis_reader(self, ins: Instruction, ref: Reference) -> Callable[[], Scalar] | None:
@@ -674,7 +677,7 @@ class _Compiler:
                               f"readable members: {', '.join(readable)}")
             return None
         env = axis.env
-        return lambda: env[member]  # type: ignore[return-value]
+        return lambda: env[member]  # type: ignore[return-value]  # only bool, int and real variables are readable (checked above)
 
     def expression(self, ins: Instruction, e: Expression) -> Callable[[], Scalar] | None:
         if isinstance(e, Number):
@@ -737,8 +740,10 @@ class _Compiler:
         sels = list(ref.selectors)
         if layout.dimensions and sels and isinstance(sels[0], Index):
             sels.pop(0)
-        if sels and isinstance(sels[0], Member) and t in STRUCTURES:
-            m = layout.member(sels.pop(0).name)  # type: ignore[union-attr]
+        first = sels[0] if sels else None
+        if isinstance(first, Member) and t in STRUCTURES:
+            sels.pop(0)
+            m = layout.member(first.name)
             if m is None:
                 return None
             t = m[1]

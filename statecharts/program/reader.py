@@ -223,8 +223,9 @@ def infer_tags(file: str, routines: tuple[Routine, ...], errors: list[Diagnostic
                             use.real = use.real or (real and top)
                         for s in ref.selectors:
                             if isinstance(s, Index):
-                                if all(isinstance(x, Number) and isinstance(x.value, int) for x in s.subscripts):
-                                    use.subscripts.append(tuple(int(x.value) for x in s.subscripts))  # type: ignore[union-attr]
+                                immediate = [x.value for x in s.subscripts if isinstance(x, Number) and isinstance(x.value, int)]
+                                if len(immediate) == len(s.subscripts):
+                                    use.subscripts.append(tuple(int(v) for v in immediate))
                                 else:
                                     use.computed_subscript = True
                             elif isinstance(s, Member):

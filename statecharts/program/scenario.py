@@ -21,7 +21,7 @@ reader + axes -> :class:`~statecharts.scan.System` with a
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,21 +31,19 @@ from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError, ScenarioError
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
-from statecharts.program.ir import AXIS_UNTYPED, Program
+from statecharts.program.ir import AXIS_UNTYPED, Program, Scalar
 from statecharts.program.ladder import Ladder, ProgramFault
 from statecharts.program.reader import load_program
 from statecharts.scan import EnvironmentEvent, ScanInputs, System
 from statecharts.scenario import (
     AxisSetup,
-    Mismatch,
     ScanRow,
     Scenario,
     ScenarioResult,
     Step,
-    _numeric_observable,
-    _passes_through,
-    _step_mismatches,
-    _visit_recorders,
+    numeric_observable,
+    passes_through_expectation,
+    run_steps,
     value_problem,
 )
 
@@ -53,14 +51,9 @@ Expectation = tuple[str, str, object]  # (observation object, field, value)
 
 
 @dataclass(frozen=True, slots=True)
-class ProgramStep(Step):
-    always: tuple[Expectation, ...] = ()
-
-
-@dataclass(frozen=True, slots=True)
 class ProgramScenario(Scenario):
     ladder_program: Program | None = None
-    initial_tags: tuple[tuple[str, object], ...] = ()
+    initial_tags: tuple[tuple[str, Scalar], ...] = ()
     prescan: bool = True
 
 
@@ -105,7 +98,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
     motion_tags = {b.tag for b in probe.bindings}
     paths = probe.paths()
 
-    def check_tag_values(values: Mapping[str, object], parts: tuple[Any, ...]) -> tuple[tuple[str, object], ...]:
+    def check_tag_values(values: Mapping[str, object], parts: tuple[Any, ...]) -> tuple[tuple[str, Scalar], ...]:
         out = []
         for tpath, value in values.items():
             try:
@@ -118,6 +111,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
             if problem:
                 err((*parts, tpath), f"{tpath} is a {'BOOL' if bit is not None else t}: {problem}")
                 continue
+            assert isinstance(value, (bool, int, float))  # value_problem accepts nothing else
             out.append((tpath, value))
         return tuple(out)
 
@@ -138,13 +132,13 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
                 return out
             for fname, value in fields.items():
                 if fname == expectations.PASSES_THROUGH and target in charts:
-                    out.append((target, fname, _passes_through(charts[target], value, (*parts, fname), err)))
+                    out.append((target, fname, passes_through_expectation(charts[target], value, (*parts, fname), err)))
                     continue
                 if fname not in allowed:
                     err((*parts, fname), f"{target} has no observable {fname!r}; expected one of: {', '.join(allowed)}")
                     continue
                 # tolerances and `not:` as in every scenario (docs/scenarios.md)
-                matcher, problem = expectations.parse(value, numeric=_numeric_observable(spec, charts.get(target), fname))
+                matcher, problem = expectations.parse(value, numeric=numeric_observable(spec, charts.get(target), fname))
                 if problem:
                     err((*parts, fname), f"{target}.{fname}: {problem}")
                     continue
@@ -164,7 +158,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
         return out
 
     initial = check_tag_values(setup.get("tags", {}), ("setup", "tags"))
-    steps: list[ProgramStep] = []
+    steps: list[Step] = []
     for i, s in enumerate(doc["steps"]):
         p = ("steps", i)
         for key in ("rungs", "operands"):
@@ -190,7 +184,7 @@ def load_program_scenario(path: Path, tree: Any, doc: Mapping[str, Any], spec: s
         for target, fields in s.get("always", {}).items():
             always.extend(resolve(target, fields, (*p, "always", target)))
         old = base.steps[i]
-        steps.append(ProgramStep(
+        steps.append(Step(
             index=i, name=old.name, scans=old.scans,
             inputs=ScanInputs(events=tuple(events), prescan=bool(s.get("prescan", False)), writes=dict(writes)),
             expect=tuple(expect), line=old.line, always=tuple(always), sets=old.sets, within=old.within))
@@ -210,54 +204,19 @@ def build_program_system(scenario: ProgramScenario, spec: spec_ir.Spec) -> Syste
     ladder = Ladder(scenario.ladder_program, scan_ms=scenario.scan_ms)
     system = System(spec, axes, [], scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms, ladder=ladder)
     for tpath, value in scenario.initial_tags:
-        ladder.write(tpath, value)  # type: ignore[arg-type]
+        ladder.write(tpath, value)
     if scenario.prescan:
         ladder.prescan()
     return system
 
 
-def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec) -> ScenarioResult:
+def run_program_scenario(scenario: ProgramScenario, spec: spec_ir.Spec, *, on_row: Callable[[ScanRow], object] | None = None,
+                         keep_rows: bool = True) -> ScenarioResult:
+    """Run a program scenario (``on_row`` and ``keep_rows`` as in :func:`statecharts.scenario.run_scenario`)."""
     try:
         system = build_program_system(scenario, spec)
     except (EvalError, ValueError) as exc:
         if isinstance(exc, InputError):
             raise
         raise ScenarioError([Diagnostic(scenario.file, 1, 1, "setup", f"cannot set up the scenario: {exc}")]) from None
-    before = system.observe()
-    rows: list[ScanRow] = []
-    mismatches: list[Mismatch] = []
-    visits = _visit_recorders(system, scenario)
-    for step in scenario.steps:
-        assert isinstance(step, ProgramStep)
-        for axis, log in visits.items():
-            log.clear()
-            ax = system.axes[axis]
-            log.extend(reversed(ax.chart.ancestors(ax.leaf.id)))
-        for axis, var, value in step.sets:
-            system.axes[axis].env[var] = value
-        for k in range(step.scans):
-            inputs = step.inputs if k == 0 else ScanInputs(prescan=step.inputs.prescan)
-            try:
-                record = system.scan(inputs)
-            except (EvalError, ProgramFault) as exc:
-                label_ = f"step {step.index + 1}" + (f" ({step.name})" if step.name else "")
-                raise ScenarioError([Diagnostic(scenario.file, step.line, 1, f"steps[{step.index}]", (
-                    f"{label_}, scan {system.index}: {exc}"))]) from None
-            changes = tuple(
-                (obj, fld, before.get(obj, {}).get(fld), val)
-                for obj, fields in record.observations.items()
-                for fld, val in fields.items()
-                if before.get(obj, {}).get(fld) != val or (obj not in before)
-            )
-            rows.append(ScanRow(step.index, step.name, record, changes))
-            before = record.observations
-            for target, fld, expected in step.always:
-                actual = before[target][fld]
-                if not expectations.holds(expected, actual):
-                    mismatches.append(Mismatch(step.index, step.name, record.index, target, fld, expected, actual,
-                                               step.line))
-            if step.within is not None and not _step_mismatches(step, before, visits, record.index):
-                break
-        mismatches.extend(_step_mismatches(step, before, visits, rows[-1].record.index))
-    return ScenarioResult(scenario, tuple(rows), tuple(mismatches))
-
+    return run_steps(system, scenario, on_row=on_row, keep_rows=keep_rows, faults=(EvalError, ProgramFault))

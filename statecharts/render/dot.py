@@ -23,6 +23,14 @@ Drawing conventions (UML state machine notation, as in the manuals):
   are solid black, environment events blue, the clock grey and dotted; eventless
   (automatic) transitions -- the fault exits -- are dashed dark red.  A legend under
   the title says so.
+
+How much text a diagram carries is its *label level* (:data:`LABEL_LEVELS`):
+``events`` (the trigger alone: the event, or the guard of an eventless transition;
+edges with the same ends and kind are merged into one listing their events), ``guards``
+(``event [guard]``, the default: what makes a transition fire) and ``full`` (with the
+actions, and the entry/exit actions in the state boxes).  Large charts are also drawn as
+an overview and parts (:mod:`statecharts.render.views`); a collapsed box lists the
+states it stands for, and a state outside the part drawn is a grey dashed stub.
 """
 
 from __future__ import annotations
@@ -56,6 +64,13 @@ EDGE_STYLES: dict[str, tuple[str, str, str]] = {
 
 STATE_FILL = "#f4f6fa"
 CLUSTER_FILL = "#fbfbfd"
+BOX_FILL = "#e8edf5"
+STUB_FILL = "#eeeeee"
+
+#: How much text diagrams carry, least first; :data:`DEFAULT_LABELS` is what
+#: ``motionchart diagram`` and ``generated/`` use.
+LABEL_LEVELS = ("events", "guards", "full")
+DEFAULT_LABELS = "guards"
 
 
 # --------------------------------------------------------------------------- HTML-like labels
@@ -100,27 +115,55 @@ def sorted_attrs(attrs: dict[str, str]) -> dict[str, str]:
 # --------------------------------------------------------------------------- chart diagrams
 
 
-def _compartment(chart: ir.Chart, state: ir.State) -> list[str]:
-    """UML compartment lines: ``entry / a``, ``exit / b``, ``event [g] / c``."""
+def check_labels(labels: str) -> str:
+    if labels not in LABEL_LEVELS:
+        raise ValueError(f"unknown label level {labels!r}; use one of {', '.join(LABEL_LEVELS)}")
+    return labels
+
+
+def _compartment(chart: ir.Chart, state: ir.State, labels: str = "full") -> list[str]:
+    """UML compartment lines: ``entry / a``, ``exit / b``, ``event [g] / c``.
+
+    Level ``full`` lists them all; ``guards`` the internal transitions without their
+    actions; ``events`` the events of the internal transitions."""
     lines: list[str] = []
-    for a in state.entry:
-        lines.extend(wrap(f"entry / {a.text}", 44))
-    for a in state.exit:
-        lines.extend(wrap(f"exit / {a.text}", 44))
+    if labels == "full":
+        for a in state.entry:
+            lines.extend(wrap(f"entry / {a.text}", 44))
+        for a in state.exit:
+            lines.extend(wrap(f"exit / {a.text}", 44))
+    seen: set[str] = set()
     for t in internal_transitions(chart, state.id):
         head = t.event or ""
+        if labels == "events":
+            head = head or "(automatic)"
+            if head not in seen:
+                seen.add(head)
+                lines.append(f"{head} / …")
+            continue
         if t.guard is not None:
             head = f"{head} [{t.guard.text}]".strip()
+        if labels == "guards":
+            lines.extend(wrap(f"{head} / …", 44))
+            continue
         acts = "; ".join(a.text for a in t.actions)
         lines.extend(wrap(f"{head} / {acts}", 44))
     return lines
 
 
-def _state_label(chart: ir.Chart, state: ir.State) -> str:
+def _state_label(chart: ir.Chart, state: ir.State, labels: str = "full") -> str:
     rows = [html_lines([state_title(state)], bold=True, size=12)]
-    comp = _compartment(chart, state)
+    comp = _compartment(chart, state, labels)
     if comp:
         rows.append(html_lines(comp, size=9, face=MONO))
+    return html_table(rows)
+
+
+def _box_label(state: ir.State, names: tuple[str, ...]) -> str:
+    """A collapsed composite: its title and the states it stands for."""
+    rows = [html_lines([state_title(state)], bold=True, size=12)]
+    if names:
+        rows.append(html_lines(wrap(", ".join(names), 34), size=9))
     return html_table(rows)
 
 
@@ -128,8 +171,17 @@ class _ChartDiagram:
     """Builds one chart's graph.  Edges are computed first (they decide which invisible
     border points each cluster needs), then the states, clusters and edges are emitted."""
 
-    def __init__(self, chart: ir.Chart) -> None:
+    def __init__(self, chart: ir.Chart, *, labels: str = DEFAULT_LABELS,
+                 collapsed: dict[str, tuple[str, ...]] | None = None, stubs: frozenset[str] = frozenset(),
+                 caption: str = "", merge: bool | None = None) -> None:
         self.chart = chart
+        self.labels = check_labels(labels)
+        self.collapsed = collapsed or {}
+        self.stubs = stubs
+        self.caption = caption
+        self.overview = bool(merge)
+        self.box_labels = "events" if self.overview else labels
+        self.merge = labels != "full" if merge is None else merge
         self.by_id = {s.id: s for s in chart.states}
         self.cluster_points: dict[str, list[str]] = {}
         self.exit_points: dict[str, list[str]] = {}
@@ -139,7 +191,7 @@ class _ChartDiagram:
             name=chart.id,
             graph_attr=sorted_attrs({
                 "compound": "true", "fontname": FONT, "fontsize": "11", "labeljust": "l",
-                "labelloc": "t", "nodesep": "0.6", "ranksep": "0.75", "rankdir": "TB",
+                "labelloc": "t", "nodesep": "0.3", "ranksep": "0.9", "rankdir": "TB",
                 "newrank": "true", "pad": "0.3", "bgcolor": "white",
             }),
             node_attr=sorted_attrs({"fontname": FONT, "fontsize": "11"}),
@@ -212,6 +264,8 @@ class _ChartDiagram:
         g = self.graph
         self._depth = self.depths()
         legend = [html_lines([f"{chart.name} ({chart.id})"], bold=True, size=14)]
+        if self.caption:
+            legend.append(html_lines([self.caption], size=10))
         used = sorted({transition_kind(chart, t) for t in chart.transitions if t.target is not None},
                       key=list(EDGE_STYLES).index)
         keys = []
@@ -232,13 +286,22 @@ class _ChartDiagram:
             if s.kind is ir.StateKind.COMPOUND and s.initial is not None:
                 self.initial_edges[s.id] = (f"{s.id}__initial", self.endpoint(s.initial, f"_initial_{s.id}"),
                                             self._clip(s.id, s.initial))
-        edges = [self.transition(t) for t in chart.transitions if t.target is not None]
-        g.node("__initial__", label="", shape="point", width="0.16", color="black")
+        edges = [self.transition(t) for t in self.drawn_transitions()]
+        entry = chart.root_initial not in self.stubs and not self.stubs
+        if entry:
+            g.node("__initial__", label="", shape="point", width="0.16", color="black")
         self.states(g, children(chart, None))
-        tail, head, attrs = self.initial_edges[None]
-        g.edge(tail, head, **attrs)
+        if entry:
+            tail, head, attrs = self.initial_edges[None]
+            g.edge(tail, head, **attrs)
         for tail, head, attrs in edges:
             g.edge(tail, head, **attrs)
+        if self.stubs:
+            with g.subgraph(name="stubs") as row:
+                row.attr(rank="sink")
+                for sid in self.chart.states:
+                    if sid.id in self.stubs:
+                        row.node(sid.id)
         return str(g.source)
 
     def states(self, g: graphviz.Digraph, states: Iterable[ir.State]) -> None:
@@ -257,16 +320,29 @@ class _ChartDiagram:
                     "label": "", "shape": "doublecircle", "style": "filled", "fillcolor": "black",
                     "width": "0.18", "fixedsize": "true", "xlabel": state_title(s), "tooltip": s.name,
                 }))
+            elif s.id in self.stubs:
+                g.node(s.id, **sorted_attrs({
+                    "label": _box_label(s, self.collapsed.get(s.id, ())), "shape": "box",
+                    "style": "rounded,filled,dashed", "fillcolor": STUB_FILL, "color": "#8a94a6",
+                    "fontcolor": "#555555", "margin": "0.12,0.06", "tooltip": s.description or s.name,
+                }))
+            elif s.id in self.collapsed:
+                g.node(s.id, **sorted_attrs({
+                    "label": _box_label(s, self.collapsed[s.id]), "shape": "box",
+                    "style": "rounded,filled,bold", "fillcolor": BOX_FILL, "color": "#3c4a5c",
+                    "margin": "0.12,0.06", "tooltip": s.description or s.name,
+                }))
             else:
                 g.node(s.id, **sorted_attrs({
-                    "label": _state_label(self.chart, s), "shape": "box", "style": "rounded,filled",
+                    "label": _state_label(self.chart, s, self.box_labels), "shape": "box", "style": "rounded,filled",
                     "fillcolor": STATE_FILL, "color": "#3c4a5c", "margin": "0.12,0.06",
                     "tooltip": s.description or s.name,
                 }))
 
     def _cluster_attrs(self, s: ir.State, *, region: bool = False) -> dict[str, str]:
         attrs = {
-            "label": _state_label(self.chart, s), "style": "rounded,dashed" if region else "rounded,filled",
+            "label": _state_label(self.chart, s, self.box_labels),
+            "style": "rounded,dashed" if region else "rounded,filled",
             "fillcolor": CLUSTER_FILL, "color": "#8a94a6" if region else "#3c4a5c",
             "fontname": FONT, "margin": "14", "tooltip": s.description or s.name, "labeljust": "l",
         }
@@ -327,26 +403,83 @@ class _ChartDiagram:
                 attrs["ltail"] = f"cluster_{source}"
         return sorted_attrs(attrs)
 
-    def transition(self, t: ir.Transition) -> tuple[str, str, dict[str, str]]:
-        assert t.target is not None
-        kind = transition_kind(self.chart, t)
-        colour, style, _ = EDGE_STYLES[kind]
-        lines = transition_lines(t)
+    def drawn_transitions(self) -> list[ir.Transition | list[ir.Transition]]:
+        """The transitions to draw: one by one, or (when merging) grouped by ends and kind."""
+        ts = [t for t in self.chart.transitions if t.target is not None]
+        if not self.merge and not self.stubs:
+            return list(ts)
+        groups: dict[tuple[str, str | None, str], list[ir.Transition]] = {}
+        out: list[ir.Transition | list[ir.Transition]] = []
+        for t in ts:
+            if not self.merge and t.source not in self.stubs and t.target not in self.stubs:
+                out.append(t)  # inside the part drawn: at the label level asked for
+                continue
+            key = (t.source, t.target, transition_kind(self.chart, t))
+            if key not in groups:
+                groups[key] = []
+                out.append(groups[key])
+            groups[key].append(t)
+        return out
+
+    def _label_parts(self, ts: list[ir.Transition], colour: str) -> list[str]:
+        t = ts[0]
+        crossing = t.source in self.stubs or t.target in self.stubs
+        if self.labels == "guards" and not crossing and not self.overview:
+            parts = []
+            for x in ts:
+                if x.event:
+                    parts.append(html_lines([x.event], bold=True, color=colour))
+                if x.guard is not None:
+                    parts.append(html_lines(wrap(f"[{x.guard.text}]"), face=MONO, size=8, color=colour))
+            return parts
+        if len(ts) > 1 or self.labels == "events" or crossing:
+            events: list[str] = []
+            for x in ts:
+                name = x.event or ""
+                if name and name not in events:
+                    events.append(name)
+            parts = [html_lines(wrap(", ".join(events), 30), bold=True, color=colour)] if events else []
+            if any(x.event is None for x in ts):
+                guards = [x.guard.text for x in ts if x.event is None and x.guard is not None]
+                if len(ts) == 1 and guards:
+                    parts.append(html_lines(wrap(f"[{guards[0]}]", 30), face=MONO, size=8, color=colour))
+                else:
+                    n = sum(1 for x in ts if x.event is None)
+                    parts.append(html_lines([f"{n} automatic" if n > 1 else "automatic"], size=8, color=colour))
+            return parts
+        lines = transition_lines(t) if self.labels == "full" else [
+            *([t.event] if t.event else []), *(wrap(f"[{t.guard.text}]") if t.guard is not None else [])]
         parts = []
         if t.event:
             parts.append(html_lines([t.event], bold=True, color=colour))
         rest = lines[1:] if t.event else lines
         if rest:
             parts.append(html_lines(rest, face=MONO, size=8, color=colour))
+        return parts
+
+    def transition(self, group: ir.Transition | list[ir.Transition]) -> tuple[str, str, dict[str, str]]:
+        ts = group if isinstance(group, list) else [group]
+        t = ts[0]
+        assert t.target is not None
+        kind = transition_kind(self.chart, t)
+        colour, style, _ = EDGE_STYLES[kind]
+        parts = self._label_parts(ts, colour)
         label = "<" + "<BR/>".join(parts) + ">" if parts else ""
-        attrs = {"color": colour, "style": style, "fontcolor": colour, "tooltip": t.id}
+        attrs = {"color": colour, "style": style, "fontcolor": colour,
+                 "tooltip": t.id if len(ts) == 1 else ", ".join(x.id for x in ts)}
         if label:
             attrs["label"] = label
         tail, head = self.endpoint(t.source, t.id), self.endpoint(t.target, t.id)
         clip = self._clip(t.source, t.target)
         depth = self._depth
-        if (t.source in depth and t.target in depth and depth[t.target] < depth[t.source]
-                and not self.descends(t.target, t.source)):
+        if self.stubs and (t.source in self.stubs or t.target in self.stubs):
+            # In a part, the states outside it sit in a row under it: an edge from one of
+            # them is laid out reversed, like a return edge.
+            reverse = t.source in self.stubs
+        else:
+            reverse = (t.source in depth and t.target in depth and depth[t.target] < depth[t.source]
+                       and not self.descends(t.target, t.source))
+        if reverse:
             # A return edge: declared the other way round and drawn with its arrow at
             # the tail, so the layout ranks it like the forward edges and keeps its
             # label beside it instead of looping it around the diagram.
@@ -359,6 +492,17 @@ class _ChartDiagram:
         return tail, head, sorted_attrs(attrs)
 
 
-def chart_dot(chart: ir.Chart) -> str:
-    """The DOT text of ``chart``'s state diagram (same chart, same bytes)."""
-    return _ChartDiagram(chart).build()
+def chart_dot(chart: ir.Chart, *, labels: str = DEFAULT_LABELS, part: str = "whole") -> str:
+    """The DOT text of ``chart``'s state diagram (same chart, same bytes).
+
+    ``labels``: one of :data:`LABEL_LEVELS`.  ``part``: ``whole`` (every state),
+    ``overview`` or the id of a composite state (:func:`statecharts.render.views.view`;
+    KeyError for a name that is none of these)."""
+    from statecharts.render.views import OVERVIEW, view
+
+    v = view(chart, part)
+    merge = True if v.name == OVERVIEW else None
+    if v.name == OVERVIEW:
+        labels = "events"  # the overview shows the structure: its edges list their events
+    return _ChartDiagram(v.chart, labels=check_labels(labels) if merge is None else labels, collapsed=v.collapsed, stubs=v.stubs, caption=v.title,
+                         merge=merge).build()

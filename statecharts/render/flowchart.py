@@ -24,7 +24,7 @@ engine runs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import graphviz
 
@@ -82,8 +82,22 @@ def _error_box(spec: ir.Spec, ins: ir.Instruction, check: ir.Check, node_id: str
     return FlowNode(node_id, "error", title, detail)
 
 
-def build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
-    """The flowchart of ``ins`` (see the module docstring for what it shows)."""
+def build_flowchart(spec: ir.Spec, ins: ir.Instruction, labels: str = "full") -> Flowchart:
+    """The flowchart of ``ins`` (see the module docstring for what it shows).
+
+    ``labels`` (:data:`statecharts.render.dot.LABEL_LEVELS`): ``full`` shows every
+    condition and action, ``guards`` the conditions without the actions, ``events`` the
+    prose alone."""
+    fc = _build_flowchart(spec, ins)
+    if labels == "full":
+        return fc
+    keep_conditions = labels == "guards"
+    nodes = tuple(
+        replace(n, detail=n.detail if (keep_conditions and n.kind == "decision") else ()) for n in fc.nodes)
+    return replace(fc, nodes=nodes)
+
+
+def _build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
     nodes: list[FlowNode] = []
     edges: list[FlowEdge] = []
     side: list[tuple[str, str]] = []
@@ -165,6 +179,59 @@ def build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
                      tuple(note), tuple(nodes), tuple(edges), tuple(side), spine)
 
 
+# --------------------------------------------------------------------------- parts
+
+#: A flowchart with more checks and aborts than this is also drawn in parts, each with
+#: at most this many (so that each fits a page).
+PART_CHECKS = 7
+
+
+def split_flowchart(fc: Flowchart) -> list[tuple[str, Flowchart]]:
+    """``[("part1", ...), ("part2", ...)]`` for a long flowchart, ``[]`` for a short one.
+
+    The checks are shared out evenly in their order; the first part starts at the rung
+    condition, the last ends with the request and its completion; a connector at the foot
+    of a part and at the head of the next says where the flow continues."""
+    checks = [n.id for n in fc.nodes if n.id.startswith("check_")]
+    aborts = [n.id for n in fc.nodes if n.id.startswith("abort_")]
+    if len(checks) + len(aborts) <= PART_CHECKS or len(checks) < 2:
+        return []
+    count = -(-(len(checks) + len(aborts)) // PART_CHECKS)
+    count = min(count, len(checks))
+    size = -(-len(checks) // count)
+    chunks = [checks[i:i + size] for i in range(0, len(checks), size)]
+    errors = {d: b for d, b in fc.side if d.startswith("check_")}
+    first_check = fc.nodes.index(next(n for n in fc.nodes if n.id == checks[0]))
+    head = {n.id for n in fc.nodes[:first_check]}
+    tail_start = max(fc.nodes.index(next(n for n in fc.nodes if n.id == c)) for c in checks) + 2
+    tail = {n.id for n in fc.nodes[tail_start:]}
+    parts: list[tuple[str, Flowchart]] = []
+    for k, chunk in enumerate(chunks, start=1):
+        ids = set(chunk) | {errors[c] for c in chunk if c in errors}
+        if k == 1:
+            ids |= head
+        if k == len(chunks):
+            ids |= tail
+        nodes = [n for n in fc.nodes if n.id in ids]
+        edges = [e for e in fc.edges if e.source in ids and e.target in ids]
+        if k > 1:
+            nodes.insert(0, FlowNode("from_previous", "terminal", (f"From part {k - 1}:", "every check so far passed")))
+            edges.insert(0, FlowEdge("from_previous", chunk[0]))
+        if k < len(chunks):
+            nodes.append(FlowNode("to_next", "terminal", (f"Continued in part {k + 1}",)))
+            edges.append(FlowEdge(chunk[-1], "to_next", "no"))
+        spine = tuple(x for x in ("from_previous", *fc.spine, "to_next") if x in {n.id for n in nodes})
+        side = tuple((a, b) for a, b in fc.side if a in ids and b in ids)
+        parts.append((f"part{k}", replace(fc, title=f"{fc.title} (part {k} of {len(chunks)})", nodes=tuple(nodes),
+                                          edges=tuple(edges), side=side, spine=spine)))
+    return parts
+
+
+def flowchart_part_names(spec: ir.Spec, ins: ir.Instruction) -> tuple[str, ...]:
+    """``whole``, and ``part1`` ... for a flowchart long enough to be split."""
+    return ("whole", *(name for name, _fc in split_flowchart(build_flowchart(spec, ins))))
+
+
 # --------------------------------------------------------------------------- DOT
 
 _FILLS = {
@@ -238,9 +305,16 @@ def flowchart_dot(fc: Flowchart) -> str:
     return str(g.source)
 
 
-def instruction_dot(spec: ir.Spec, ins: ir.Instruction) -> str:
-    """The DOT text of ``ins``'s flowchart."""
-    return flowchart_dot(build_flowchart(spec, ins))
+def instruction_dot(spec: ir.Spec, ins: ir.Instruction, *, labels: str | None = None, part: str = "whole") -> str:
+    """The DOT text of ``ins``'s flowchart (``part``: ``whole`` or a name of
+    :func:`flowchart_parts`; KeyError for another)."""
+    from statecharts.render.dot import DEFAULT_LABELS, check_labels
+
+    fc = build_flowchart(spec, ins, check_labels(labels or DEFAULT_LABELS))
+    if part != "whole":
+        fc = dict(split_flowchart(fc))[part]
+    return flowchart_dot(fc)
 
 
-__all__ = ["FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "flowchart_dot", "instruction_dot"]
+__all__ = ["PART_CHECKS", "FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "flowchart_dot",
+           "flowchart_part_names", "instruction_dot", "split_flowchart"]

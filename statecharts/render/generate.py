@@ -33,8 +33,9 @@ from statecharts import ir
 from statecharts.diagnostics import Diagnostic, SpecError
 from statecharts.render import aoi as aoi_render
 from statecharts.render import sources as sources_render
+from statecharts.render import views
 from statecharts.render.dot import chart_dot
-from statecharts.render.flowchart import instruction_dot
+from statecharts.render.flowchart import flowchart_dot, flowchart_part_names, instruction_dot, split_flowchart
 from statecharts.render.graphviz_bin import GraphvizNotFoundError, render
 from statecharts.render.labels import spec_path
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
@@ -142,12 +143,14 @@ def build(
     text: dict[str, str] = {}
     dots: dict[str, str] = {}
     for c in spec.charts:
-        dots[f"diagrams/{c.id}"] = chart_dot(c)
+        for name in views.view_names(c):
+            dots[f"diagrams/{views.stem(c, name)}"] = chart_dot(c, part=name)
         text[f"diagrams/{c.id}.mmd"] = chart_mermaid(c)
         if scxml:
             text[f"scxml/{c.id}.scxml"] = chart_scxml(c, source=spec_path(spec, c.location.file))
     for i in spec.instructions:
-        dots[f"flowcharts/{i.id}"] = instruction_dot(spec, i)
+        for name in flowchart_part_names(spec, i):
+            dots[f"flowcharts/{i.id}" + ("" if name == "whole" else f".{name}")] = instruction_dot(spec, i, part=name)
         text[f"flowcharts/{i.id}.mmd"] = instruction_mermaid(spec, i)
     catalog = {e.code: e.name for e in spec.errors}
     extra_uses: dict[str, list[Use]] = {}
@@ -158,6 +161,8 @@ def build(
             raise SpecError([Diagnostic(doc.file, doc.prov.line, 1, "aoi.id",
                                         f"add-on instruction {doc.id!r} would overwrite {clash[0]}.dot; rename it")])
         dots[f"flowcharts/{fc}"] = aoi_render.aoi_flowchart_dot(doc)
+        for part_name, part_fc in split_flowchart(aoi_render.build_aoi_flowchart(doc)):
+            dots[f"flowcharts/{fc}.{part_name}"] = flowchart_dot(part_fc)
         text[f"flowcharts/{fc}.mmd"] = aoi_render.aoi_flowchart_mermaid(doc)
         dots[f"diagrams/{rc}"] = aoi_render.recovery_dot(doc)
         text[f"diagrams/{rc}.mmd"] = aoi_render.recovery_mermaid(doc)

@@ -20,6 +20,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from statecharts import ir
+from statecharts.render import views
+from statecharts.render.flowchart import flowchart_part_names
 from statecharts.render.labels import spec_path, state_title, where
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
 from statecharts.render.traceability import ScenarioRun, Traceability
@@ -173,6 +175,22 @@ def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool 
         "## Diagram",
         "",
     ]
+    if views.is_split(chart):
+        parts = [n for n in views.view_names(chart) if n not in (views.WHOLE, views.OVERVIEW)]
+        links = ", ".join(f"[{n}](#{anchor('part-' + n)})" for n in parts)
+        out += [f"The chart is drawn as an overview, where each composite state of simple states is one box, "
+                f"and one diagram per composite ({links}); "
+                f"the whole chart in one diagram is [diagrams/{chart.id}.svg]({p}diagrams/{chart.id}.svg) "
+                f"(large). `motionchart diagram {chart.id} --part NAME` draws one of them.", ""]
+        ov = views.stem(chart, views.OVERVIEW)
+        out += [f"![Overview of {chart.id}]({p}diagrams/{ov}.svg)", "",
+                f"Source: [Graphviz DOT]({p}diagrams/{ov}.dot).", ""]
+        for n in parts:
+            st = views.stem(chart, n)
+            out += [f'<a id="{anchor("part-" + n)}"></a>', "", f"### {chart.state(n).name} (`{n}`)", "",
+                    f"![{n} part of {chart.id}]({p}diagrams/{st}.svg)", "",
+                    f"Source: [Graphviz DOT]({p}diagrams/{st}.dot).", ""]
+        out += ["### The whole chart", ""]
     out += _diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(chart), f"{p}diagrams/{chart.id}.mmd",
                           f"{p}diagrams/{chart.id}.dot", f"State diagram of {chart.id}")
     out += ["", "## States", ""]
@@ -243,7 +261,7 @@ def _error_label(spec: ir.Spec, ins: ir.Instruction, err: int, exerr: int) -> tu
     """(name, meaning, confidence, source) of an ERR/EXERR pair."""
     if exerr:
         for x in spec.extended_errors:
-            if (x.instruction, x.err, x.exerr) == (ins.id, err, exerr):
+            if x.instruction in (ins.id, ins.mnemonic) and (x.err, x.exerr) == (err, exerr):
                 return x.name, x.meaning, confidence(x.confidence), x.provenance.source
     try:
         e = spec.error(err)
@@ -267,6 +285,13 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
         "## Flowchart",
         "",
     ]
+    parts = [n for n in flowchart_part_names(spec, ins) if n != "whole"]
+    if parts:
+        out += [f"The flowchart is long, so it is also drawn in {len(parts)} parts that each fit a page; the whole "
+                f"flowchart follows them. `motionchart diagram {ins.id} --part NAME` draws one of them.", ""]
+        for part_name in parts:
+            out += [f"![{ins.id} flowchart, {part_name}]({p}flowcharts/{ins.id}.{part_name}.svg)", "",
+                    f"Source: [Graphviz DOT]({p}flowcharts/{ins.id}.{part_name}.dot).", ""]
     out += _diagram_block(f"{p}flowcharts/{ins.id}.svg", instruction_mermaid(spec, ins), f"{p}flowcharts/{ins.id}.mmd",
                           f"{p}flowcharts/{ins.id}.dot", f"Flowchart of {ins.id}")
     out += ["", "## Operands", ""]
@@ -290,7 +315,7 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
             "update; at that point every check is evaluated again, in this order.", ""]
     rows = []
     for n, ch in enumerate(ins.checks, start=1):
-        name, meaning, conf, _src = _error_label(spec, ins, ch.err, ch.exerr)
+        name, _meaning, conf, _src = _error_label(spec, ins, ch.err, ch.exerr)
         rows.append([
             str(n), f'<a id="{anchor("check-" + ch.id)}"></a>`{ch.id}`', code(ch.fails_when.text), ch.stage.value,
             str(ch.err), str(ch.exerr) if ch.exerr else "—", cell(name), cell(ch.description),
@@ -311,22 +336,16 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
             for ab in ins.aborts
         ])
 
-    out += ["", "## Error codes", ""]
-    pairs: dict[tuple[int, int], list[ir.Check]] = {}
-    for ch in (*ins.checks, *ins.aborts):
-        pairs.setdefault((ch.err, ch.exerr), []).append(ch)
-    rows = []
-    for (err, exerr), checks in sorted(pairs.items()):
-        name, meaning, conf, src = _error_label(spec, ins, err, exerr)
-        interps = sorted({c.provenance.interpretation for c in checks if c.provenance.interpretation})
-        rows.append([
-            str(err), str(exerr) if exerr else "—", cell(name), cell(meaning),
-            "; ".join(f"[`{c.id}`](#{anchor('check-' + c.id)}): {code(c.fails_when.text)}" for c in checks),
-            cell(src), cell(conf) + ("; " + ", ".join(interp_link(i, p) for i in interps) if interps else ""),
-            scenario_links(tr.producing(ins.id, err, exerr), p, 3, tr.link_base) if tr.root is not None else "—",
-        ])
-    out += table(["ERR", "EXERR", "Name", "Meaning", "Condition (checks)", "Source", "Confidence / interpretation",
-                  "Scenarios producing it"], rows)
+    out += ["", "## Error codes", "",
+            "Every code documented for the instruction (its checks, and the extended codes of "
+            f"`spec/errors.yaml` for {ins.mnemonic}), whether the model produces it and how.", ""]
+    out += documented_codes_table(("ERR", "EXERR"), instruction_codes(spec, ins, tr, p), p)
+    statuses = status_values(spec, ins)
+    if statuses:
+        out += ["", "## Status values", "",
+                "The documented values of the axis status attributes this instruction reads or writes, and "
+                "which spec elements of the model set each value.", ""]
+        out += documented_values_table(statuses, p)
 
     t = ins.table
     out += ["", "## Execution table", "", f"Table `{t.id}`, source: {cell(t.provenance.source)}."
@@ -364,6 +383,166 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
     if tr.root is not None:
         out += [f"- Scenarios that complete it (DN observed): {scenario_links(tr.completing(ins.id), p, base=tr.link_base)}"]
     return "\n".join(out) + "\n"
+
+
+
+# --------------------------------------------------------------------------- documented codes
+
+
+@dataclass(frozen=True, slots=True)
+class DocumentedCode:
+    """One documented code of an instruction, as its page lists it.
+
+    ``key`` is the code's columns (``("12", "16")`` for ERR 12 / EXERR 16, ``("1004",)``
+    for an add-on instruction's code); ``produced`` says, in Markdown, each way the model
+    produces it (empty: documented, not modelled)."""
+
+    key: tuple[str, ...]
+    name: str
+    meaning: str
+    source: str
+    confidence: str
+    interpretations: tuple[str, ...] = ()
+    produced: tuple[str, ...] = ()
+    scenarios: str = "—"
+    #: when not produced here: where else the model produces it (another variant)
+    elsewhere: tuple[str, ...] = ()
+
+
+#: The column that says whether a code is modelled (the tests read it).
+MODELLED_COLUMN = "Modelled"
+
+
+def documented_codes_table(key_headers: Sequence[str], codes: Sequence[DocumentedCode], prefix: str) -> list[str]:
+    """The Markdown table of an instruction's documented codes, modelled or not."""
+    rows = []
+    for c in codes:
+        conf = cell(c.confidence)
+        if c.interpretations:
+            conf += "; " + ", ".join(interp_link(i, prefix) for i in c.interpretations)
+        how = "; ".join(c.produced or c.elsewhere) or "— (documented, not modelled)"
+        rows.append([*c.key, cell(c.name), cell(c.meaning), cell(c.source), conf, "yes" if c.produced else "no",
+                     how, c.scenarios])
+    return table([*key_headers, "Name", "Meaning", "Source", "Confidence / interpretation", MODELLED_COLUMN,
+                  "How the model produces it", "Scenarios producing it"], rows)
+
+
+def instruction_codes(spec: ir.Spec, ins: ir.Instruction, tr: Traceability, prefix: str) -> list[DocumentedCode]:
+    """Every code documented for ``ins``: those its checks and aborts report, and the
+    extended codes ``spec/errors.yaml`` gives its mnemonic, sorted by ERR then EXERR."""
+    pairs: dict[tuple[int, int], list[ir.Check]] = {}
+    for ch in (*ins.checks, *ins.aborts):
+        pairs.setdefault((ch.err, ch.exerr), []).append(ch)
+    for x in spec.extended_errors:
+        if x.instruction in (ins.id, ins.mnemonic):
+            pairs.setdefault((x.err, x.exerr), [])
+    out = []
+    aborts = {a.id for a in ins.aborts}
+    for (err, exerr), checks in sorted(pairs.items()):
+        name, meaning, conf, src = _error_label(spec, ins, err, exerr)
+        interps = tuple(sorted({c.provenance.interpretation for c in checks if c.provenance.interpretation}
+                               | set(_extended_interpretation(spec, ins, err, exerr))))
+        produced = tuple(
+            f"{'abort' if c.id in aborts else 'check'} [`{c.id}`](#{anchor('check-' + c.id)}) when "
+            f"{code(c.fails_when.text)}" for c in checks)
+        others: tuple[str, ...] = ()
+        if not produced:
+            by = []
+            for v in spec.instructions:
+                if v.mnemonic == ins.mnemonic and v.id != ins.id:
+                    found = [f"[`{c.id}`]({v.id}.md#{anchor('check-' + c.id)})"
+                             for c in (*v.checks, *v.aborts) if (c.err, c.exerr) == (err, exerr)]
+                    if found:
+                        by.append(f"variant [{v.id}]({v.id}.md) ({', '.join(found)})")
+            others = (f"not by this variant; by {'; '.join(by)}",) if by else ()
+        scen = scenario_links(tr.producing(ins.id, err, exerr), prefix, 3, tr.link_base) if tr.root is not None else "—"
+        out.append(DocumentedCode((str(err), str(exerr) if exerr else "—"), name, meaning, src, conf, interps,
+                                  produced, scen, others))
+    return out
+
+
+def _extended_interpretation(spec: ir.Spec, ins: ir.Instruction, err: int, exerr: int) -> list[str]:
+    return [x.provenance.interpretation for x in spec.extended_errors
+            if x.instruction in (ins.id, ins.mnemonic) and (x.err, x.exerr) == (err, exerr)
+            and x.provenance.interpretation]
+
+
+@dataclass(frozen=True, slots=True)
+class StatusValue:
+    chart: str
+    variable: str
+    value: ir.DocumentedValue
+    produced: tuple[str, ...]
+
+
+def _constants(text: str, target: str) -> set[object] | None:
+    """The constant values an assignment's right-hand side can give (None: not only constants)."""
+    import ast
+
+    def walk(node: ast.AST) -> set[object] | None:
+        if isinstance(node, ast.Constant):
+            return {node.value}
+        if isinstance(node, ast.IfExp):
+            a, b = walk(node.body), walk(node.orelse)
+            return None if a is None or b is None else a | b
+        if isinstance(node, ast.Name) and node.id == target:
+            return set()  # unchanged
+        return None
+
+    try:
+        return walk(ast.parse(text, mode="eval").body)
+    except SyntaxError:  # pragma: no cover - the loader parsed it already
+        return None
+
+
+def status_values(spec: ir.Spec, ins: ir.Instruction) -> list[StatusValue]:
+    """The documented values of the chart variables ``ins`` reads or writes (``axis.X``),
+    each with the spec elements that set it."""
+    names: set[str] = set()
+    exprs = [c.fails_when for c in (*ins.checks, *ins.aborts)] + ([ins.done_when] if ins.done_when else [])
+    for e in exprs:
+        names |= {n.split(".", 1)[1] for n in e.names if n.startswith("axis.")}
+    for a in ins.request.actions if ins.request else ():
+        names |= {n.split(".", 1)[1] for n in (a.target, *a.value.names) if n.startswith("axis.")}
+    out: list[StatusValue] = []
+    for chart_id in ins.charts:
+        chart = spec.chart(chart_id)
+        for v in chart.variables:
+            if v.name not in names or not v.values:
+                continue
+            setters: list[tuple[str, str, set[object] | None]] = []
+            for t in chart.transitions:
+                for a in t.actions:
+                    if a.target == v.name:
+                        setters.append((f"transition `{t.id}`", a.text, _constants(a.value.text, v.name)))
+            for st in chart.states:
+                for a in st.entry:
+                    if a.target == v.name:
+                        setters.append((f"entry of `{st.id}`", a.text, _constants(a.value.text, v.name)))
+            for a in ins.request.actions if ins.request else ():
+                if a.target == f"axis.{v.name}":
+                    setters.append((f"the {ins.id} request", a.text, _constants(a.value.text, f"axis.{v.name}")))
+            for dv in v.values:
+                produced = [f"{who} ({code(text)})" for who, text, consts in setters
+                            if consts is None or dv.value in consts]
+                if dv.value == v.initial:
+                    produced.insert(0, "initial value")
+                out.append(StatusValue(chart_id, v.name, dv, tuple(produced)))
+    return out
+
+
+def documented_values_table(values: Sequence[StatusValue], prefix: str) -> list[str]:
+    rows = []
+    for sv in values:
+        dv = sv.value
+        conf = cell(confidence(dv.confidence))
+        if dv.provenance.interpretation:
+            conf += "; " + interp_link(dv.provenance.interpretation, prefix)
+        rows.append([f"[{sv.chart}]({prefix}charts/{sv.chart}.md)", f"`{sv.variable}`", cell(dv.value),
+                     cell(dv.meaning), cell(dv.provenance.source), conf, "yes" if sv.produced else "no",
+                     "; ".join(sv.produced) if sv.produced else "— (documented, not modelled)"])
+    return table(["Chart", "Attribute", "Value", "Meaning", "Source", "Confidence / interpretation", MODELLED_COLUMN,
+                  "Set by"], rows)
 
 
 def table_blocks_note() -> str:
@@ -414,16 +593,14 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
     out += ["", "## Extended error codes", ""]
     rows = []
     for x in spec.extended_errors:
-        # the extended error belongs to the mnemonic: the variant of that id, else every variant
-        owners = [i for i in spec.instructions if i.id == x.instruction] or list(spec.variants(x.instruction))
+        owners = [i for i in spec.instructions if x.instruction in (i.id, i.mnemonic)]
         x_checks = [(i, c) for i in owners for c in (*i.checks, *i.aborts) if (c.err, c.exerr) == (x.err, x.exerr)]
         page = owners[0].id if owners else x.instruction
         rows.append([
             f"[{x.instruction}](instructions/{page}.md)", str(x.err), str(x.exerr), f"`{x.name}`",
             cell(x.meaning), cell(confidence(x.confidence)), cell(x.provenance.source),
             interp_link(x.provenance.interpretation, ""),
-            ", ".join((f"[{c.id}]" if len(owners) == 1 else f"[{i.id}.{c.id}]")
-                      + f"(instructions/{i.id}.md#{anchor('check-' + c.id)})" for i, c in x_checks)
+            ", ".join(f"[{i.id}.{c.id}](instructions/{i.id}.md#{anchor('check-' + c.id)})" for i, c in x_checks)
             or "— (documented, not modelled)",
         ])
     out += table(["Instruction", "ERR", "EXERR", "Name", "Meaning", "Confidence", "Source", "Interpretation",

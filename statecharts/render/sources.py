@@ -132,16 +132,16 @@ def citing_elements(spec_dir: Path, reg: S.Registry) -> dict[str, dict[str, list
 
 
 def _keys(src: S.Source, loc: str) -> list[str]:
-    bare = S._without_notes(loc).strip()
+    bare = S.without_notes(loc).strip()
     if src.locator == "pages":
         return [f"p{p}" for p in sorted(set(S.cited_pages(loc)))] or [""]
     if src.locator == "topics":
         return [w.strip() for w in bare.split(",") if w.strip()] or [""]
     if src.locator == "sections":
-        numbers = S._SECTION_NUMBER.findall(bare)
+        numbers = S.SECTION_NUMBER.findall(bare)
         if numbers:
             return sorted({f"§{n}" for n in numbers})
-        names = [n for n, _ in src.sections if not n.startswith("§") and S._starts_with_name(bare, n)]
+        names = [n for n, _ in src.sections if not n.startswith("§") and S.starts_with_name(bare, n)]
         return [max(names, key=len)] if names else [""]
     if src.locator == "path":
         return [bare.split()[0]] if bare else [""]

@@ -382,11 +382,11 @@ class Model:
         for name, g in self.axis_defs:
             chart = self.charts[g.chart]
             # drive events (a move reaching its target...) are free inputs: the motion abstraction
-            inputs = {e.name for e in chart.events if e.kind in ("environment", "drive")}
+            offered = {e.name for e in chart.events if e.kind in ("environment", "drive")}
             events = sysdef.environment if sysdef.environment is not None else tuple(
                 e.name for e in chart.events if e.kind in ("environment", "drive"))
             for ev in events:
-                if ev in inputs:
+                if ev in offered:
                     self.event_choices.append(self._choice(
                         "event", axis=name, event=ev, inputs=ScanInputs(events=(EnvironmentEvent(name, ev),))))
         # the drive events of each axis also come together with a raise, a drop or an

@@ -33,7 +33,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ProcessEnded, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -183,7 +183,7 @@ class Session:
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         si = ScanInputs(rungs=rungs, operands=operands, events=tuple(events), prescan=bool(inputs.get("prescan", False)))
         if self.record:
-            trace: list[Executed | Errored | Done] = []
+            trace: list[Executed | Errored | Done | ProcessEnded] = []
             system.trace = trace
             for axis in system.axes.values():
                 axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
@@ -199,7 +199,7 @@ class Session:
             cid = axis.chart.id
             self.covered.states.update(f"{cid}:{s}" for s in axis.active)
 
-    def _note(self, trace: list[Executed | Errored | Done]) -> None:
+    def _note(self, trace: list[Executed | Errored | Done | ProcessEnded]) -> None:
         cov = self.covered
         for axis in self.system.axes.values():
             cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)  # type: ignore[attr-defined]  # see above

@@ -127,7 +127,12 @@ class Session:
             except (KeyError, ValueError) as exc:
                 raise SetupError(f"axis {a['name']}: {exc}") from None
         program = []
+        masters: dict[str, str] = {}
         for p in setup.get("program", []):
+            if "master" in p:
+                if p["master"] not in {a.name for a in axes}:
+                    raise SetupError(f"tag {p['tag']}: unknown master axis {p['master']!r}")
+                masters[p["tag"]] = p["master"]
             if not self.spec.variants(p["instruction"]):
                 try:
                     self.spec.instruction(p["instruction"])
@@ -138,7 +143,7 @@ class Session:
             program.append((p["tag"], p["instruction"], p["axis"]))
         try:
             cls = _RecordingSystem if record else System
-            self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms)
+            self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms, masters=masters)
         except (KeyError, ValueError) as exc:
             raise SetupError(str(exc)) from None
         for p in setup.get("program", []):

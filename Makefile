@@ -65,8 +65,10 @@ generate: install
 	@$(BIN)/motionchart generate
 	@$(BIN)/python tools/write_sources_doc.py
 
-# Checker speed against a hand-written reference BFS (prints figures; not a test).
+# Start-up times of the CLI (--help, one diagram) beside the interpreter's own, then checker
+# speed against a hand-written reference BFS (prints figures; not a test).
 bench: install
+	@$(BIN)/python benchmarks/startup.py
 	@$(BIN)/python benchmarks/bench.py
 	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
 	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors

@@ -16,35 +16,23 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn, TextIO
 
+from statecharts.cli_args import EXIT_FINDING, input_error, positive_seconds
+from statecharts.cli_args import EXIT_OK as EXIT_OK  # re-exported for the other checker commands
+from statecharts.cli_args import EXIT_USAGE as EXIT_USAGE
+from statecharts.cli_args import positive_int as positive_int
 from statecharts.diagnostics import InputError
 
 if TYPE_CHECKING:  # the checker modules are imported when a check runs, not when the CLI starts
     from checker.properties import Property
     from statecharts import ir
 
-EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
+EXIT_VIOLATED = EXIT_FINDING
+EXIT_INCOMPLETE = 3
 DEFAULT_SYSTEM = "noncip"
 
 
-def positive_int(text: str) -> int:
-    """An argparse type: a whole number of at least 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
-
-
-def _positive_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
+#: shared with the other subcommands (statecharts.cli_args)
+_positive_float = positive_seconds
 
 
 #: Most axes ``--axes`` may put in a group (each axis multiplies the state space).
@@ -204,9 +192,7 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
         props = load_properties(spec, args.properties)
         model = Model(spec, sysdef, props, symmetry=False if args.no_symmetry else None)
     except (InputError, ModelError) as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_VIOLATED
+        return input_error(exc)
     except (EvalError, DivergenceError, ArithmeticError, RecursionError) as exc:
         _cannot_explore(exc, props if "props" in locals() else (), spec if "spec" in locals() else None)
         return EXIT_VIOLATED

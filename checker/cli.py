@@ -157,13 +157,18 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         return EXIT_USAGE
     if args.paths and all(_is_program_file(p) for p in args.paths):
         return _validate_programs(args, out)
+    from statecharts.progress import Progress
+
     problems: list[Diagnostic] = []
     spec = None
+    progress = Progress("motionchart validate")
+    progress.update("loading the spec")
     try:
         spec = load_spec(args.paths or None)
     except InputError as exc:
         problems.extend(exc.diagnostics)
     aoi_docs = []
+    progress.update("loading the add-on instructions")
     try:
         aoi_docs = load_aoi_documents(args.paths or None)
     except InputError as exc:
@@ -171,6 +176,7 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         # quotes the main spec's first error when they do not load: that is no new problem.
         seen = [str(d) for d in problems]
         problems.extend(d for d in exc.diagnostics if not any(text in d.message for text in seen))
+    progress.close()
     # a YAML error in spec/aoi/ or spec/instructions/motion/ is found by both loaders: report it once
     problems = list(dict.fromkeys(problems))
     if problems or spec is None:
@@ -342,8 +348,13 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
         return EXIT_FAIL
     results: list[ScenarioResult] = []
     input_errors: list[str] = []
-    for f in files:
-        streaming = not (args.json or args.quiet or args.summary)
+    from statecharts.progress import Progress
+
+    streaming = not (args.json or args.quiet or args.summary)
+    # the streamed tables show the work as it goes; the other modes get a status line
+    progress = Progress("motionchart simulate", enabled=False if streaming else None)
+    for n, f in enumerate(files):
+        progress.update(f"running {shown_name(f)}", n, len(files))
         try:
             scenario = load_scenario(f, spec)
             if streaming:
@@ -352,6 +363,7 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
             result = run_scenario(scenario, spec, on_row=(lambda row: _print_row(row, out)) if streaming else None,
                                   keep_rows=bool(args.json))
         except InputError as exc:
+            progress.clear()
             input_errors.extend(str(d) for d in exc.diagnostics)
             for d in exc.diagnostics:
                 print(d, file=sys.stderr)
@@ -359,6 +371,7 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
         results.append(result)
         if args.summary and result.passed:
             continue
+        progress.clear()
         if not args.json:
             verdict = "PASS" if result.passed else "FAIL"
             out.write(f"{verdict} {scenario.name} ({result.scans} scans)\n")
@@ -366,6 +379,7 @@ def _simulate(args: argparse.Namespace, out: TextIO) -> int:
                 out.write(f"  {m.located(scenario.file)}\n")
             if not (args.quiet or args.summary):
                 out.write("\n")
+    progress.close()
     failed = [r for r in results if not r.passed]
     if args.json:
         json.dump({"results": [_result_json(r) for r in results], "input_errors": input_errors,

@@ -643,7 +643,7 @@ def _trap_summary(model: ProgramModel, graph: Graph, trap: Sequence[int]) -> lis
 
 def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[ProgramProperty] = (),
                max_states: int | None = None, max_seconds: float | None = None,
-               counterexamples: Path | None = None) -> ProgramReport:
+               counterexamples: Path | None = None, progress: Any = None) -> ProgramReport:
     model = system.model(spec)
     props = [*system.properties, *extra]
     if not props:
@@ -663,7 +663,7 @@ def run_system(system: ProgramSystem, spec: spec_ir.Spec, *, extra: Sequence[Pro
     if problems:
         raise InputError(problems)
     graph = explore(model, system.starts(), max_states=max_states, max_scans=system.max_scans,
-                    max_seconds=max_seconds, prune=[predicates[p.expr] for p in domain_props])
+                    max_seconds=max_seconds, prune=[predicates[p.expr] for p in domain_props], progress=progress)
     verdicts = check(model, graph, props, predicates)
     report = ProgramReport(system, model, graph, verdicts)
     if counterexamples is not None:
@@ -699,8 +699,16 @@ def run(args: argparse.Namespace, system_path: Path | None, out: TextIO) -> int:
             except ValueError as exc:
                 print(f"motionchart check: --property: {exc}", file=sys.stderr)
                 return EXIT_USAGE
+        progress = None
+        if not (args.quiet or args.json) and sys.stderr.isatty():
+            def progress(found: int, expanded: int) -> None:
+                print(f"\rexploring: {found:,} states found, {expanded:,} expanded", end="", file=sys.stderr,
+                      flush=True)
         report = run_system(system, spec, extra=extra, max_states=args.max_states, max_seconds=args.max_seconds,
-                            counterexamples=Path(args.counterexamples) if args.counterexamples else None)
+                            counterexamples=Path(args.counterexamples) if args.counterexamples else None,
+                            progress=progress)
+        if progress is not None:
+            print("\r\033[K", end="", file=sys.stderr, flush=True)
     except (InputError, ProgramModelError) as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)

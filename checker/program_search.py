@@ -310,20 +310,48 @@ def _forward(g: Graph, sources: Iterable[int], allowed: Callable[[int], bool] | 
     return seen
 
 
-def _backward(g: Graph, pred: list[list[int]], targets: Iterable[int]) -> set[int]:
+class Reverse:
+    """The graph's edges backwards, by successor set: states that share their set of successors
+    (every state of one controller state does) are one group, so a backward search visits each
+    group once instead of each edge."""
+
+    def __init__(self, g: Graph) -> None:
+        groups: dict[int, int] = {}
+        self.members: list[list[int]] = []
+        self.of: list[list[int]] = [[] for _ in g.states]  # state -> groups whose successors include it
+        for u, ts in enumerate(g.succ):
+            if not ts:
+                continue
+            k = groups.get(id(ts))
+            if k is None:
+                k = groups[id(ts)] = len(self.members)
+                self.members.append([])
+                for v in ts:
+                    self.of[v].append(k)
+            self.members[k].append(u)
+
+
+def _backward(g: Graph, rev: Reverse, targets: Iterable[int]) -> set[int]:
+    """Every state from which one of ``targets`` is reachable (the targets included)."""
     seen = set(targets)
     todo = deque(seen)
+    done: set[int] = set()
+    members, of = rev.members, rev.of
     while todo:
         v = todo.popleft()
-        for u in pred[v]:
-            if u not in seen:
-                seen.add(u)
-                todo.append(u)
+        for k in of[v]:
+            if k in done:
+                continue
+            done.add(k)
+            for u in members[k]:
+                if u not in seen:
+                    seen.add(u)
+                    todo.append(u)
     return seen
 
 
-def _starts_reaching(g: Graph, pred: list[list[int]], targets: Iterable[int]) -> list[int]:
-    back = _backward(g, pred, targets)
+def _starts_reaching(g: Graph, rev: Reverse, targets: Iterable[int]) -> list[int]:
+    back = _backward(g, rev, targets)
     return [n for n, s in enumerate(g.start_states) if s in back]
 
 
@@ -389,12 +417,12 @@ def _into_trap(g: Graph, first: int) -> tuple[list[int], list[int], list[int]]:
 def check(model: ProgramModel, g: Graph, props: Sequence[ProgramProperty],
           predicates: dict[str, Predicate]) -> list[Verdict]:
     out: list[Verdict] = []
-    pred_cache: list[list[int]] | None = None
+    pred_cache: Reverse | None = None
 
-    def preds() -> list[list[int]]:
+    def preds() -> Reverse:
         nonlocal pred_cache
         if pred_cache is None:
-            pred_cache = g.predecessors()
+            pred_cache = Reverse(g)
         return pred_cache
 
     def holds_in(text: str) -> list[bool]:
@@ -461,7 +489,7 @@ def check(model: ProgramModel, g: Graph, props: Sequence[ProgramProperty],
 
 
 def _leads_to(g: Graph, prop: ProgramProperty, trigger: list[bool], goal: list[bool],
-              preds: Callable[[], list[list[int]]]) -> Verdict:
+              preds: Callable[[], Reverse]) -> Verdict:
     n = len(g.states)
     bound = prop.within
     if bound is None:
@@ -598,7 +626,7 @@ def _path_within(g: Graph, sources: list[int], target: int, region: set[int]) ->
     return g.path(inner[0])[:-1] + inner
 
 
-def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callable[[], list[list[int]]]) -> Verdict:
+def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callable[[], Reverse]) -> Verdict:
     search = _EventuallyFrom(g, goal, list(dict.fromkeys(g.start_states)))
     found = search.find()
     if found is None:
@@ -610,7 +638,7 @@ def _eventually(g: Graph, prop: ProgramProperty, goal: list[bool], preds: Callab
                    hanging_starts=[n for n, s in enumerate(g.start_states) if s in search.doomed])
 
 
-def _livelock(model: ProgramModel, g: Graph, prop: ProgramProperty, preds: Callable[[], list[list[int]]]) -> Verdict:
+def _livelock(model: ProgramModel, g: Graph, prop: ProgramProperty, preds: Callable[[], Reverse]) -> Verdict:
     import networkx as nx
     n = len(g.states)
     waiting = [u for u in range(n) if model.waiting(g.states[u])]

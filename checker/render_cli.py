@@ -40,6 +40,7 @@ from typing import Any
 from statecharts.diagnostics import InputError
 from statecharts.inputs import output_path_problem, path_argument_problem, shown_name
 from statecharts.outputs import replace_folder
+from statecharts.progress import Progress
 
 COMMANDS = ("diagram", "docs", "generate")
 FORMATS = ("dot", "svg", "png", "pdf", "mermaid")
@@ -263,13 +264,18 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     bad = _check_inputs(args, prog)
     if bad is not None:
         return bad
-    spec = load_spec(args.spec)
-    docs = load_aoi_documents(args.spec)
-    artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs)
-    try:
-        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=False))
-    except OSError as exc:
-        return _fail(prog, _os_message(exc))
+    with Progress(prog) as progress:
+        progress.update("loading the spec")
+        spec = load_spec(args.spec)
+        docs = load_aoi_documents(args.spec)
+        artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs,
+                          progress=progress.update)
+        progress.update(f"writing {len(artefacts.files)} files")
+        try:
+            report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=False))
+        except OSError as exc:
+            progress.close()
+            return _fail(prog, _os_message(exc))
     print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged); "
           f"start at {out / 'index.md'}")
     return EXIT_OK
@@ -284,27 +290,35 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
     bad = _check_inputs(args, prog)
     if bad is not None:
         return bad
-    spec = load_spec(args.spec)
-    docs = load_aoi_documents(args.spec)
-    if args.check:
-        artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip", aoi=docs)
-        with tempfile.TemporaryDirectory(prefix="motionchart-generate-") as tmp:
-            write(tmp, artefacts.files, prune=False)
-            stale = stale_files(out, tmp)
-        if not stale:
-            print(f"{out}: up to date ({len(artefacts.files)} files)")
-            return EXIT_OK
-        print(f"{out} is out of date; {len(stale)} file(s) differ from what the spec generates:", file=sys.stderr)
-        for rel in stale:
-            note = " (no Graphviz program here to redraw it)" if rel in artefacts.unrendered else ""
-            print(f"  {out.as_posix().rstrip('/')}/{rel}{note}", file=sys.stderr)
-        print(f"run `{FIX_COMMAND}` (or `motionchart generate`) to update it", file=sys.stderr)
-        return EXIT_FAIL
-    artefacts = build(spec, _scenario_roots(args), out, aoi=docs)
-    try:
-        report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))
-    except OSError as exc:
-        return _fail(prog, _os_message(exc))
-    print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged, "
-          f"{len(report.removed)} removed)")
-    return EXIT_OK
+    with Progress(prog) as progress:
+        progress.update("loading the spec")
+        spec = load_spec(args.spec)
+        docs = load_aoi_documents(args.spec)
+        if args.check:
+            artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip", aoi=docs,
+                              progress=progress.update)
+            progress.update("comparing")
+            with tempfile.TemporaryDirectory(prefix="motionchart-generate-") as tmp:
+                write(tmp, artefacts.files, prune=False)
+                stale = stale_files(out, tmp)
+            progress.close()
+            if not stale:
+                print(f"{out}: up to date ({len(artefacts.files)} files)")
+                return EXIT_OK
+            print(f"{out} is out of date; {len(stale)} file(s) differ from what the spec generates:", file=sys.stderr)
+            for rel in stale:
+                note = " (no Graphviz program here to redraw it)" if rel in artefacts.unrendered else ""
+                print(f"  {out.as_posix().rstrip('/')}/{rel}{note}", file=sys.stderr)
+            print(f"run `{FIX_COMMAND}` (or `motionchart generate`) to update it", file=sys.stderr)
+            return EXIT_FAIL
+        artefacts = build(spec, _scenario_roots(args), out, aoi=docs, progress=progress.update)
+        progress.update(f"writing {len(artefacts.files)} files")
+        try:
+            report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))
+        except OSError as exc:
+            progress.close()
+            return _fail(prog, _os_message(exc))
+        progress.close()
+        print(f"{out}: {len(artefacts.files)} files ({len(report.written)} written, {report.unchanged} unchanged, "
+              f"{len(report.removed)} removed)")
+        return EXIT_OK

@@ -20,21 +20,12 @@ import sys
 from pathlib import Path
 from typing import Any, TextIO
 
-from checker.check_cli import positive_int
+from statecharts.cli_args import EXIT_FINDING as EXIT_FAIL
+from statecharts.cli_args import EXIT_OK, EXIT_USAGE, input_error, positive_int
+from statecharts.cli_args import positive_seconds as _seconds
 from statecharts.diagnostics import InputError
 
-EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
 COMMANDS = ("vectors", "conform", "adapter", "mutate")
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
-    if not 0 < value < 1e6:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
@@ -134,9 +125,7 @@ def _vectors(args: argparse.Namespace, out: TextIO) -> int:
         suite = vec.build_suite(spec, scenarios=scenarios, systems=systems, progress=_progress(args.quiet))
         vec.write_suite(suite, Path(args.output))
     except InputError as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_FAIL
+        return input_error(exc)
     except OSError as exc:
         print(f"motionchart vectors: cannot write {args.output}: {exc.strerror or exc}", file=sys.stderr)
         return EXIT_FAIL
@@ -189,9 +178,7 @@ def _conform(args: argparse.Namespace, out: TextIO) -> int:
         vectors = load_vectors(directory)
         known = runner.load_known_failures(Path(args.known_failures)) if args.known_failures else []
     except InputError as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_FAIL
+        return input_error(exc)
     if not vectors:
         print(f"motionchart conform: no vectors in {directory}", file=sys.stderr)
         return EXIT_USAGE
@@ -239,9 +226,7 @@ def _adapter(args: argparse.Namespace) -> int:
     try:
         spec = load_spec(args.spec)
     except InputError as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_FAIL
+        return input_error(exc)
     if args.mutant:
         from conformance.mutation import find
         try:
@@ -267,19 +252,23 @@ def _mutate(args: argparse.Namespace, out: TextIO) -> int:
         vectors = load_vectors(directory)
         spec = load_spec()
     except InputError as exc:
-        for d in exc.diagnostics:
-            print(d, file=sys.stderr)
-        return EXIT_FAIL
+        return input_error(exc)
     progress = None if (args.quiet or args.json) else (lambda msg: print(f"mutate: {msg}", file=sys.stderr, flush=True))
-    explained: dict[str, str] = {}
+    explained: dict[str, dict[str, str]] = {}
     manifest = directory / "manifest.json" if directory.is_dir() else None
     if manifest is not None and manifest.is_file():
         try:
-            explained = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]["orders"]["explained"]
-        except (ValueError, KeyError, TypeError):
+            coverage = json.loads(manifest.read_text(encoding="utf-8"))["coverage"]
+            explained = {k: dict(coverage[k]["explained"]) for k in ("orders", "refusals") if k in coverage}
+        except (ValueError, KeyError, TypeError, AttributeError):
             explained = {}
-    score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
-                           explained_orders=explained)
+    try:
+        score = mutation.score(spec, vectors, sample=args.sample, subprocess_sample=args.subprocess, progress=progress,
+                               explained_orders=explained.get("orders", {}),
+                               explained_refusals=explained.get("refusals", {}))
+    except mutation.BaselineError as exc:
+        print(f"motionchart mutate: {exc}", file=sys.stderr)
+        return EXIT_FAIL
     if args.json:
         json.dump(score.as_dict(), out, indent=2, sort_keys=True, default=str)
         out.write("\n")

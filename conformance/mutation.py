@@ -341,6 +341,30 @@ def try_mutant(m: Mutant, spec: ir.Spec, vectors: Sequence[Mapping[str, Any]],
     return MutantResult(m, False)
 
 
+class BaselineError(RuntimeError):
+    """The unmutated spec fails some vector on the back-end the mutants are served with:
+    a kill there would say nothing about the mutant."""
+
+
+def baseline(spec: ir.Spec, vectors: Sequence[Mapping[str, Any]]) -> None:
+    """Every vector passes on the unmutated spec served as the mutants are (the checker's
+    interpreter in process); raise :class:`BaselineError` naming those that do not."""
+    from conformance import runner
+    worker = runner.Worker(lambda: in_process(spec), message_timeout=60.0, vector_timeout=600.0)
+    bad = []
+    try:
+        for v in vectors:
+            verdict = worker.run(v)
+            if verdict.verdict != "pass":
+                bad.append(f"{v['id']}: {verdict.detail}")
+    finally:
+        worker.close()
+    if bad:
+        raise BaselineError("the unmutated spec does not pass every vector on the checker's interpreter, so the "
+                            "interpreter and the engine disagree: " + "; ".join(bad[:5])
+                            + (f" (and {len(bad) - 5} more)" if len(bad) > 5 else ""))
+
+
 def in_process(mutated: ir.Spec) -> Any:
     from checker.compile import FastAxis
     from conformance.adapter import ReferenceAdapter
@@ -372,8 +396,8 @@ def sample(ms: Sequence[Mutant], n: int) -> list[Mutant]:
 
 def order_equivalence(spec: ir.Spec, m: Mutant, explained_orders: Mapping[str, str]) -> str:
     """Why a reorder mutant cannot be told apart, or "": the two checks report the same
-    codes at the same stage, or no reachable state makes both fail (as the vector
-    generator found when it looked for a run that covers that order)."""
+    codes, or the exhaustive search of every system that runs the instruction found no
+    evaluation where both fail (as the vector generator reports it in the manifest)."""
     if m.kind != "reorder" or m.instruction is None:
         return ""
     from conformance.vectors import observable_order, order_item
@@ -382,17 +406,29 @@ def order_equivalence(spec: ir.Spec, m: Mutant, explained_orders: Mapping[str, s
     k = next(i for i, c in enumerate(ins.checks) if c.id == a_id)
     if not observable_order(ins, k):
         c = ins.checks[k]
-        return f"{a_id} and {b_id} both report ERR {c.err}, EXERR {c.exerr} at stage {c.stage.value}; their order cannot be seen"
+        return f"{a_id} and {b_id} both report ERR {c.err}, EXERR {c.exerr}; their order cannot be seen"
     reason = explained_orders.get(order_item(ins, k))
-    # only an exhaustive "no state makes both hold" is a proof; runs that were tried are not
-    if not reason or "both hold" in reason:
+    # only an exhaustive search is a proof; runs that were tried are not
+    if not reason or "exhaustive search" not in reason:
         return ""
     return f"the two checks never fail together: {reason}"
+
+
+def guard_equivalence(m: Mutant, explained_refusals: Mapping[str, str]) -> str:
+    """Why a dropped guard of a transition on an event cannot be told apart, or "": the
+    exhaustive search never tries the transition with its guard false."""
+    if m.kind != "drop_guard":
+        return ""
+    reason = explained_refusals.get(m.id.split(" ", 1)[1])
+    if not reason or "exhaustive search" not in reason:
+        return ""
+    return f"the guard is never false where the transition is tried: {reason}"
 
 
 def score(spec: ir.Spec, vectors: Sequence[Mapping[str, Any]], *, sample_size: int | None = None,
           subprocess_sample: int = 0, progress: Callable[[str], None] | None = None,
           equivalents: Mapping[str, str] | None = None, explained_orders: Mapping[str, str] | None = None,
+          explained_refusals: Mapping[str, str] | None = None,
           **kwargs: Any) -> Score:
     """Build the mutants of what the vectors use, serve each through the reference adapter, score."""
     if "sample" in kwargs:
@@ -402,11 +438,13 @@ def score(spec: ir.Spec, vectors: Sequence[Mapping[str, Any]], *, sample_size: i
     families = {f for v in vectors for f in v["requires"]["axis_families"]}
     mnemonics = {i for v in vectors for i in v["requires"]["instructions"]}
     ins_ids = [i.id for i in spec.instructions if i.mnemonic in mnemonics and families & set(i.charts)]
+    baseline(spec, vectors)
     ms = mutants(spec, charts=sorted(families), instructions=ins_ids)
     if sample_size is not None:
         ms = sample(ms, sample_size)
     eq = load_equivalents() if equivalents is None else dict(equivalents)
     eq.update({m.id: why for m in ms if m.id not in eq and (why := order_equivalence(spec, m, explained_orders))})
+    eq.update({m.id: why for m in ms if m.id not in eq and (why := guard_equivalence(m, explained_refusals or {}))})
     results: list[MutantResult] = []
     for n, m in enumerate(ms, 1):
         r = try_mutant(m, spec, vectors, in_process)

@@ -68,7 +68,8 @@ INPUTS = {
 COVERS = {
     "type": "object", "additionalProperties": False,
     "required": ["states", "transitions", "error_codes", "cells", "checks"],
-    "properties": dict.fromkeys(("states", "transitions", "error_codes", "cells", "checks", "orders", "stated"), NAME_LIST),
+    "properties": dict.fromkeys(("states", "transitions", "error_codes", "cells", "checks", "orders", "refusals",
+                                 "stated"), NAME_LIST),
 }
 REQUIRES = {
     "type": "object", "additionalProperties": False,

@@ -10,8 +10,10 @@ A set-up and the inputs of a scan are the plain JSON objects of the vector forma
 (the reference semantics); the model checker's interpreter
 (:class:`checker.compile.FastAxis`) can be given instead, and with ``record=True`` the
 session also collects what each scan covered (chart states and transitions, instruction
-x state cells, error codes, failed checks); recording needs the interpreter back-end,
-which reports the transitions it takes.
+x state cells, error codes, failed checks, check orders and refused guards, see
+:mod:`conformance.witness`); recording needs that module's back-end
+(:class:`conformance.witness.RecordingAxis`), which reports the transitions it takes
+and the guards it refuses.
 
 Example::
 
@@ -51,8 +53,10 @@ class Covered:
     checks: set[str] = field(default_factory=set)
     #: adjacent checks k and k+1 that both failed where k was the first: ``MSO.shutdown<faulted``
     orders: set[str] = field(default_factory=set)
+    #: guarded transitions tried on an event and refused by their guard: ``AxisNonCIP:test_cancelled``
+    refusals: set[str] = field(default_factory=set)
 
-    KINDS = ("states", "transitions", "error_codes", "cells", "checks", "orders")
+    KINDS = ("states", "transitions", "error_codes", "cells", "checks", "orders", "refusals")
 
     def update(self, other: Covered) -> None:
         for k in self.KINDS:
@@ -69,24 +73,6 @@ class Covered:
             else:
                 out[k] = sorted(items)
         return out
-
-
-class _RecordingSystem(System):
-    """The scan rules unchanged; a failed check also notes whether the next one failed too
-    (then the order of the two decided the reported code)."""
-
-    orders: set[str]
-
-    def _first_failure(self, tag: Any, stages: tuple[ir.Stage, ...]) -> ir.Check | None:
-        failed = super()._first_failure(tag, stages)
-        if failed is not None:
-            checks = tag.instruction.checks
-            k = next((i for i, c in enumerate(checks) if c is failed), None)
-            if k is not None and k + 1 < len(checks):
-                nxt = checks[k + 1]
-                if nxt.stage in stages and nxt.fails_when(self._check_env(tag)):
-                    self.orders.add(f"{tag.instruction.id}.{failed.id}<{nxt.id}")
-        return failed
 
 
 def error_item(mnemonic: str, err: int, exerr: int) -> str:
@@ -142,7 +128,8 @@ class Session:
                 raise SetupError(f"tag {p['tag']}: unknown axis {p['axis']!r}")
             program.append((p["tag"], p["instruction"], p["axis"]))
         try:
-            cls = _RecordingSystem if record else System
+            from conformance.witness import RecordingSystem
+            cls = RecordingSystem if record else System
             self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms, masters=masters)
         except (KeyError, ValueError) as exc:
             raise SetupError(str(exc)) from None
@@ -150,8 +137,7 @@ class Session:
             self._write_operands(p["tag"], p.get("operands", {}))
         self.record = record
         self.covered = Covered()
-        if isinstance(self.system, _RecordingSystem):
-            self.system.orders = self.covered.orders
+        if record:
             for axis in axes:
                 axis.fired = []
             self._note_states()
@@ -206,8 +192,12 @@ class Session:
 
     def _note(self, trace: list[Executed | Errored | Done | ProcessEnded]) -> None:
         cov = self.covered
+        from conformance.witness import split_fired
         for axis in self.system.axes.values():
-            cov.transitions.update(f"{axis.chart.id}:{t}" for t in axis.fired)  # type: ignore[attr-defined]  # see above
+            transitions, orders, refusals = split_fired(axis.chart.id, axis.fired)  # type: ignore[attr-defined]  # see above
+            cov.transitions.update(transitions)
+            cov.orders.update(orders)
+            cov.refusals.update(refusals)
         tags = self.system.tags
         for rec in trace:
             if type(rec) is Executed:

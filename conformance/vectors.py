@@ -51,22 +51,37 @@ from statecharts.diagnostics import Diagnostic, ScenarioError
 
 VECTOR_FORMAT = "motionchart-vector/1"
 MANIFEST_FORMAT = "motionchart-vector-manifest/1"
-#: the systems vectors are generated from: the bundled check systems (noncip_pairs adds no
-#: item and takes minutes) and small systems of this package for what those leave out (CIP
-#: self-test states; MRHD through a CIP axis's initialisation and tests; the servo axis's
-#: encoder and marker tests; a servo axis starting in Axis Faulted without a latched fault)
 SYSTEMS_DIR = Path(__file__).resolve().parent / "systems"
-DEFAULT_SYSTEMS = ("noncip", "cip", *(str(SYSTEMS_DIR / f"{n}.yaml") for n in (
-    "cip_unassigned", "cip_hookup", "noncip_hookup", "noncip_faulted_start")))
+#: what the suite is generated from: the systems, and the charts none of them drives (data)
+SUITE_FILE = SYSTEMS_DIR / "suite.yaml"
+
+
+def suite_plan(path: Path = SUITE_FILE) -> tuple[tuple[str, ...], dict[str, str]]:
+    """(systems: bundled names or files, charts no system drives -> reason) of ``suite.yaml``."""
+    from checker.system import bundled_systems
+    from statecharts.diagnostics import Diagnostic, InputError
+    from statecharts.loader import plain_data, read_yaml
+    errors: list[Diagnostic] = []
+    tree = read_yaml(path, errors, what="vector suite plan")
+    doc = plain_data(tree) if tree is not None and not errors else None
+    if not isinstance(doc, dict) or not isinstance(doc.get("systems"), list) \
+            or not isinstance(doc.get("not_driven", {}), dict):
+        raise InputError(errors or [Diagnostic(str(path), 1, 1, "", "expected `systems:` (a list of names) "
+                                               "and `not_driven:` (chart -> reason)")])
+    bundled = bundled_systems()
+    systems = tuple(str(n) if str(n) in bundled else str(SYSTEMS_DIR / f"{n}.yaml") for n in doc["systems"])
+    not_driven = {str(k): " ".join(str(v).split()) for k, v in doc.get("not_driven", {}).items()}
+    return systems, not_driven
+
+
+DEFAULT_SYSTEMS, NOT_DRIVEN = suite_plan()
 AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
                 "which runs on a separate world of its own; vectors carry the main scenario format only")
 LADDER_LEFT_OUT = ("runs a ladder program file (docs/programs.md); version 1 of the vector format carries "
                    "programs of motion instruction calls only")
-#: charts that only the add-on instruction's world drives
-AOI_CHARTS = ("AxisVirtual", "DeviceHandler")
 
-ORDER_OF_KINDS = ("transitions", "error_codes", "cells", "checks", "orders", "states")
+ORDER_OF_KINDS = ("transitions", "error_codes", "cells", "checks", "orders", "refusals", "states")
 
 
 @dataclass
@@ -78,6 +93,7 @@ class Suite:
     universe: dict[str, list[str]] = field(default_factory=dict)
     explained: dict[str, dict[str, str]] = field(default_factory=dict)  # kind -> item -> reason
     systems: list[dict[str, object]] = field(default_factory=list)
+    searched: list[_Searched] = field(default_factory=list)
 
     def covered(self) -> Covered:
         c = Covered()
@@ -117,6 +133,8 @@ def _universe(spec: ir.Spec) -> dict[str, list[str]]:
     out["checks"] = [f"{ins.id}.{c.id}" for ins in spec.instructions for c in ins.checks]
     out["orders"] = [order_item(ins, k) for ins in spec.instructions for k in range(len(ins.checks) - 1)
                      if observable_order(ins, k)]
+    from conformance.witness import refusal_universe
+    out["refusals"] = refusal_universe(spec)
     return out
 
 
@@ -127,9 +145,10 @@ def order_item(ins: ir.Instruction, k: int) -> str:
 
 def observable_order(ins: ir.Instruction, k: int) -> bool:
     """Whether swapping checks k and k+1 could be seen at all: not when both report the
-    same ERR and EXERR at the same stage."""
+    same ERR and EXERR (wherever both are evaluated the same code is reported, and where
+    only one of them is evaluated their order does not matter)."""
     a, b = ins.checks[k], ins.checks[k + 1]
-    return (a.err, a.exerr, a.stage) != (b.err, b.exerr, b.stage)
+    return (a.err, a.exerr) != (b.err, b.exerr)
 
 
 def _explanations(spec: ir.Spec, universe: Mapping[str, list[str]]) -> dict[str, dict[str, str]]:
@@ -140,12 +159,11 @@ def _explanations(spec: ir.Spec, universe: Mapping[str, list[str]]) -> dict[str,
         if p.kind == "cover" and p.cover in out:
             for u in p.unreachable:
                 out[p.cover].setdefault(u.item, " ".join(u.reason.split()))
-    for kind in ("states", "transitions"):
+    for kind in ("states", "transitions", "refusals"):
         for item in universe[kind]:
-            if item.split(":", 1)[0] in AOI_CHARTS:
-                out[kind].setdefault(item, (
-                    f"chart {item.split(':', 1)[0]} is driven only by the add-on instruction's world, whose "
-                    f"scenarios are {AOI_LEFT_OUT.split(', which')[0].removeprefix('written ')}"))
+            chart = item.split(":", 1)[0]
+            if chart in NOT_DRIVEN:
+                out[kind].setdefault(item, f"chart {chart} is {NOT_DRIVEN[chart]}")
     # a check whose error code cannot be produced cannot be the first to fail either
     for ins in spec.instructions:
         for c in ins.checks:
@@ -179,8 +197,8 @@ def run_on_engine(spec: ir.Spec, setup: Mapping[str, Any], inputs: Sequence[Mapp
 
 
 def measure_coverage(spec: ir.Spec, setup: Mapping[str, Any], inputs: Sequence[Mapping[str, Any]]) -> Covered:
-    from checker.compile import FastAxis
-    s = Session(spec, setup, backend=FastAxis, record=True)
+    from conformance.witness import RecordingAxis
+    s = Session(spec, setup, backend=RecordingAxis, record=True)
     for i in inputs:
         s.scan(i)
     return s.covered
@@ -334,22 +352,27 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
     """Shortest runs for every item the checker covers on ``system`` (a bundled name or a file)."""
     from checker import search
     from checker.counterexample import replay
-    from checker.model import Model
     from checker.properties import load_properties
     from checker.system import bundled_systems, load_system
+    from conformance.witness import WitnessModel, decode
     path = bundled_systems().get(str(system), Path(system))
     sysdef = load_system(path, spec)
-    model = Model(spec, sysdef, load_properties(spec))
+    model = WitnessModel(spec, sysdef, load_properties(spec))
     if progress:
         progress(f"exploring system {sysdef.name}")
     result = (explore_fn or _witness_search(search))(model, progress=False, witnesses=True)
     suite.systems.append({"name": sysdef.name, "states": result.states, "transitions": result.transitions,
                           "complete": result.complete})
+    if result.complete:
+        events = {"tick"} | {c.event for c in model.choices if c.kind == "event" and c.event}
+        events |= {t.instruction.request.event for t in model.tags if t.instruction.request is not None}
+        suite.searched.append(_Searched(sysdef.name, frozenset(model.charts),
+                                        frozenset(t.instruction.id for t in model.tags), frozenset(events)))
     # order the witnesses by the kind of item, then by the universe's order of items
     rank = {kind: {it: i for i, it in enumerate(items)} for kind, items in suite.universe.items()}
     items = []
     for item, where in result.coverage.first.items():
-        kind, text = _item_text(item)
+        kind, text = decode(item) or _item_text(item)
         items.append((ORDER_OF_KINDS.index(kind), rank.get(kind, {}).get(text, 1 << 30), text, kind, where))
     items.sort()
     by_witness: dict[tuple[int, int], list[tuple[str, str]]] = {}
@@ -359,17 +382,31 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
         trace = replay(result, "", None, end_state=state)
         choices = [st.choice for st in trace.steps] + [model.choices[choice]]
         kind0, text0 = found[0]
-        vid = f"{sysdef.name}-{kind0.rstrip('s').replace('_code', '')}-{_slug(text0.replace('/', '-').replace(':', '.'))}"
-        what = "; ".join(f"{k.replace('_', ' ').rstrip('s')} {t}" for k, t in found)
+        vid = f"{sysdef.name}-{_KIND_IN_ID[kind0]}-{_slug(text0.replace('/', '-').replace(':', '.').replace('<', '-before-'))}"
+        what = "; ".join(f"{_KIND_IN_TEXT[k]} {t}" for k, t in found)
         v = _run_vector(spec, model, sysdef, suite, trace.assignment, choices, vid, what)
         missing = [t for k, t in found if t not in v["covers"][k]]
         if missing:
             raise RuntimeError(f"vector {vid}: the replayed run does not cover {missing}; the abstraction is not exact")
         suite.vectors.append(v)
-    orders = _order_vectors(spec, model, result, suite, sysdef, replay)
     if progress:
-        progress(f"system {sysdef.name}: {result.states:,} states, {len(by_witness)} shortest runs, "
-                 f"{orders} check-order runs")
+        progress(f"system {sysdef.name}: {result.states:,} states, {len(by_witness)} shortest runs")
+
+
+_KIND_IN_ID = {"transitions": "transition", "error_codes": "error", "cells": "cell", "checks": "check",
+               "orders": "order", "refusals": "refusal", "states": "state"}
+_KIND_IN_TEXT = {"transitions": "transition", "error_codes": "error code", "cells": "cell", "checks": "check",
+                 "orders": "check order", "refusals": "refused guard of", "states": "state"}
+
+
+@dataclass(frozen=True)
+class _Searched:
+    """A system whose search was complete: what it could have shown."""
+
+    name: str
+    charts: frozenset[str]
+    instructions: frozenset[str]
+    events: frozenset[str]  # the events its axes can get: tick, environment events, requests
 
 
 def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment: Sequence[int],
@@ -415,83 +452,64 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
         origin=f"motionchart check --system {sysdef.name}", universe=suite.universe)
 
 
-#: states looked at per order pair before it is given up as not reachable in a system
-ORDER_CANDIDATES = 8
-
-
-def _order_vectors(spec: ir.Spec, model: Any, result: Any, suite: Suite, sysdef: Any, replay: Any) -> int:
-    """For every pair of adjacent checks of an instruction in this system that no vector
-    covers yet, the first state (in BFS order) where raising the call makes both fail:
-    there the order of the two decides the reported code.  Each candidate run is kept when
-    it does cover the pair (the second check really fails after the first, measured on the
-    run); a pair without one is explained as not reachable in the systems searched."""
-    covered = suite.covered().orders
-    wanted: dict[str, tuple[ir.Instruction, int]] = {}
-    for tag in model.tags:
-        ins = tag.instruction
-        for k in range(len(ins.checks) - 1):
-            item = order_item(ins, k)
-            if observable_order(ins, k) and item not in covered:
-                wanted[item] = (ins, k)
-    tries = dict.fromkeys(wanted, 0)
-    searched = set(wanted)
-    made = 0
-    for i in range(result.states):
-        if not wanted:
-            break
-        flat = result.state(i)
-        model.load(flat)
-        for ch in model.enabled():
-            if ch.kind != "raise" or not wanted:
-                continue
-            tag = model.system.tags[ch.tag]
-            ins = tag.instruction
-            env = dict(model.system.axes[tag.axis].expression_env())
-            env.update({f"op.{k}": v for k, v in tag.operands.items()})
-            env.update({f"op.{k}": v for k, v in ch.operands})
-            for k in range(len(ins.checks) - 1):
-                item = order_item(ins, k)
-                if item not in wanted:
-                    continue
-                a, b = ins.checks[k], ins.checks[k + 1]
-                try:
-                    both = bool(a.fails_when(env)) and bool(b.fails_when(env))
-                except Exception:
-                    both = False
-                if not both:
-                    continue
-                trace = replay(result, "", None, end_state=i)
-                choices = [st.choice for st in trace.steps] + [ch]
-                vid = f"{sysdef.name}-order-{_slug(item.replace('<', '-before-'))}"
-                v = _run_vector(spec, model, sysdef, suite, trace.assignment, choices, vid, f"check order {item}")
-                model.load(flat)
-                if item in v["covers"]["orders"]:
-                    suite.vectors.append(v)
-                    made += 1
-                    for it in v["covers"]["orders"]:
-                        wanted.pop(it, None)
-                else:
-                    tries[item] += 1
-                    if tries[item] >= ORDER_CANDIDATES:
-                        wanted.pop(item)
-    reasons = suite.explained.setdefault("orders", {})
-    for item in searched:
-        if item in suite.covered().orders:
-            reasons.pop(item, None)
+def _explain_unseen(spec: ir.Spec, suite: Suite) -> None:
+    """Orders and refusals no vector covers, that the complete search of every system that
+    runs the instruction (has an axis of the chart) never showed: explained with that."""
+    got = suite.covered()
+    instructions = {i.id: i for i in spec.instructions}
+    for item in suite.universe.get("orders", []):
+        if item in got.orders or item in suite.explained["orders"]:
             continue
-        ins, k = next((t.instruction, k) for t in model.tags for k in range(len(t.instruction.checks) - 1)
-                      if order_item(t.instruction, k) == item)
-        a, b = ins.checks[k], ins.checks[k + 1]
-        if tries.get(item):
-            why = (f"in the search of system {sysdef.name}, `{a.fails_when.text}` and `{b.fails_when.text}` both "
-                   f"hold where {ins.id} executes, but in the first {tries[item]} such runs {b.id} is not still "
-                   f"failing when {a.id} fails first")
-        else:
-            why = (f"no state reached by the exhaustive search of system {sysdef.name} makes both "
-                   f"`{a.fails_when.text}` ({a.id}) and `{b.fails_when.text}` ({b.id}) hold where {ins.id} executes")
-        prev = reasons.get(item)
-        reasons[item] = why if prev is None else f"{prev}; {why}"
-    return made
+        iid, pair = item.split(".", 1)
+        first, second = pair.split("<")
+        names = [s.name for s in suite.searched if iid in s.instructions]
+        if not names:
+            continue
+        ins = instructions[iid]
+        a = next(c for c in ins.checks if c.id == first)
+        b = next(c for c in ins.checks if c.id == second)
+        why = (f"the exhaustive search of system{'s' if len(names) > 1 else ''} {', '.join(names)} finds no "
+               f"evaluation of {iid}'s checks (at {a.stage.value if a.stage is b.stage else 'the delivery'}) where "
+               f"`{a.fails_when.text}` ({first}) fails first and `{b.fails_when.text}` ({second}) fails too")
+        hint = _exclusive_states(spec, ins, a, b) or _stage_hint(a, b)
+        suite.explained["orders"][item] = f"{hint}; {why}" if hint else why
+    for item in suite.universe.get("refusals", []):
+        if item in got.refusals or item in suite.explained["refusals"]:
+            continue
+        cid, tid = item.split(":", 1)
+        t = next(x for x in spec.chart(cid).transitions if x.id == tid)
+        # only a search in which the event can happen at all shows the guard is never false
+        names = [s.name for s in suite.searched if cid in s.charts and t.event in s.events]
+        if not names:
+            continue
+        suite.explained["refusals"][item] = (
+            f"the exhaustive search of system{'s' if len(names) > 1 else ''} {', '.join(names)} never tries "
+            f"transition {tid} on event {t.event} with its guard `{t.guard.text if t.guard else ''}` false")
+
+
+def _stage_hint(a: ir.Check, b: ir.Check) -> str:
+    """Why two checks of different stages rarely fail together: only at the delivery are
+    both evaluated, and a failing execute-stage check errs the call before it is queued."""
+    if a.stage is b.stage:
+        return ""
+    early = a if a.stage is ir.Stage.EXECUTE else b
+    return (f"only at the delivery are both evaluated, and a call whose {early.id} check fails at its "
+            f"execution errs there and is never delivered, so both fail only if `{early.fails_when.text}` "
+            f"became true between the execution and the delivery")
+
+
+def _exclusive_states(spec: ir.Spec, ins: ir.Instruction, a: ir.Check, b: ir.Check) -> str:
+    """When the two checks fail only in two different leaf states of every chart of the
+    instruction, that reason (the axis is in one leaf state at a time)."""
+    pattern = re.compile(r"^'([A-Za-z0-9_]+)' in axis\.active$")
+    ma, mb = pattern.match(a.fails_when.text.strip()), pattern.match(b.fails_when.text.strip())
+    if not (ma and mb) or ma[1] == mb[1]:
+        return ""
+    for cid in ins.charts:
+        leaves = {s.id for s in spec.chart(cid).leaf_states()}
+        if ma[1] not in leaves or mb[1] not in leaves:
+            return ""
+    return f"{a.id} fails only in state {ma[1]} and {b.id} only in state {mb[1]}, and an axis is in one leaf state at a time"
 
 
 # --------------------------------------------------------------------------- the suite
@@ -507,6 +525,7 @@ def build_suite(spec: ir.Spec, *, scenarios: Sequence[Path | str] = ("scenarios"
         scenario_vectors(spec, scenarios, suite, progress)
     for system in systems:
         generated_vectors(spec, system, suite, progress)
+    _explain_unseen(spec, suite)
     # de-duplicate: the same set-up and inputs give the same observations
     seen: dict[str, dict[str, Any]] = {}
     unique = []

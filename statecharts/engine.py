@@ -60,6 +60,9 @@ class ChartModel:
 
     env: dict[str, object]
     microsteps: int = 0
+    #: while set, eventless guards are false: :meth:`AxisInstance.send` holds them while the
+    #: event it sends selects its transitions (see there)
+    hold_eventless: bool = False
 
     def __init__(self, env: dict[str, object]) -> None:
         self.env = env
@@ -76,6 +79,8 @@ def _eventless_guard_method(
     chart_id: str, t: ir.Transition, guard: Callable[[Mapping[str, object]], object]
 ) -> Callable[..., bool]:
     def method(self: ChartModel, *args: object, **kwargs: object) -> bool:
+        if self.hold_eventless:
+            return False
         taken = bool(guard(self.env))
         if taken:
             self.microsteps += 1
@@ -247,8 +252,24 @@ class AxisInstance:
         return self.leaf.value
 
     def send(self, event: str) -> None:
+        """One macrostep (docs/semantics.md): the transitions ``event`` enables, then the
+        eventless transitions, again and again until none is enabled.
+
+        The variables may have changed since the last macrostep ended (the actions of an
+        environment event or of a request are applied just before the event is sent), and
+        python-statemachine's processing loop takes the eventless transitions enabled
+        then *before* it takes the event.  They are held off while the event selects and
+        takes its transitions, and taken after it."""
         self.model.microsteps = 0
-        self.machine.send(event)
+        if event == SETTLE_EVENT:
+            self.machine.send(event)
+            return
+        self.model.hold_eventless = True
+        try:
+            self.machine.send(event)
+        finally:
+            self.model.hold_eventless = False
+        self.machine.send(SETTLE_EVENT)
 
     def snapshot(self) -> tuple[frozenset[str], tuple[object, ...]]:
         """(active configuration, chart variable values in declaration order)."""

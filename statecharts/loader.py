@@ -297,7 +297,29 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
     if raw is None:
         return None
-    return parse_yaml_bytes(name, raw, errors, what=what)
+    cacheable = _in_bundled_spec(path)
+    if cacheable and _remembered_tree(name, raw) is None:
+        from statecharts import tree_cache
+
+        cached = tree_cache.load(raw)
+        if cached is not None:
+            _remember_tree(name, raw, cached)
+            return cached
+    before = len(errors)
+    tree = parse_yaml_bytes(name, raw, errors, what=what)
+    if cacheable and tree is not None and len(errors) == before:
+        from statecharts import tree_cache
+
+        tree_cache.store(raw, tree)
+    return tree
+
+
+def _in_bundled_spec(path: Path) -> bool:
+    """Whether ``path`` is a file of the bundled spec (whose parsed trees are cached on disk)."""
+    try:
+        return bundled_spec_dir().resolve() in Path(path).resolve().parents
+    except (OSError, ModuleNotFoundError):  # pragma: no cover - package data missing
+        return False
 
 
 def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: str = "file") -> Any | None:
@@ -350,6 +372,13 @@ def parse_yaml_bytes(name: str, raw: bytes, errors: list[Diagnostic], *, what: s
 _TREES: dict[tuple[str, bytes], Any] = {}
 _TREES_MAX_BYTES = 16_000_000
 _trees_bytes = 0
+
+
+def forget_trees() -> None:
+    """Empty the in-process memo of parsed trees (the next load parses or reads the disk cache)."""
+    global _trees_bytes
+    _TREES.clear()
+    _trees_bytes = 0
 
 
 def _remember_tree(name: str, raw: bytes, tree: Any) -> None:

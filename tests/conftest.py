@@ -4,7 +4,8 @@ The hypothesis profile is chosen here and nowhere else; ``make test``, ``.ci/run
 a plain ``pytest`` all run ``ci`` unless ``HYPOTHESIS_PROFILE`` names another one:
 
 * ``ci`` (default) – 100 examples per test, derandomized (every run tries the same
-  examples, so a failure reproduces), the reproduction blob printed on failure;
+  examples, so a failure reproduces), the reproduction blob printed on failure, no
+  example database (nothing written into the checkout; parallel workers share nothing);
 * ``dev`` – quick local runs while editing (50 examples, random);
 * ``deep`` – long searches before a release (2000 examples), used by ``make deep``.
 
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 import os
 import sys
-from collections.abc import Container, Iterable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -40,7 +41,7 @@ pytest_plugins = ["pytester"]
 
 DEFAULT_PROFILE = "ci"
 _NOT_TIMED = {"deadline": None, "suppress_health_check": [HealthCheck.too_slow]}
-settings.register_profile("ci", max_examples=100, derandomize=True, print_blob=True, **_NOT_TIMED)
+settings.register_profile("ci", max_examples=100, derandomize=True, print_blob=True, database=None, **_NOT_TIMED)
 settings.register_profile("dev", max_examples=50, **_NOT_TIMED)
 settings.register_profile("deep", max_examples=2000, **_NOT_TIMED)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
@@ -48,6 +49,32 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
 
 def pytest_report_header(config: pytest.Config) -> str:
     return f"hypothesis profile: {settings.get_current_profile_name()}"
+
+
+# With pytest-xdist (``-n``) the workers collect and deselect, and the summary line leaves
+# the deselected count out: each worker reports it, and the summary names it again.
+_DESELECTED: list[int] = []
+
+
+def pytest_deselected(items: Sequence[pytest.Item]) -> None:
+    _DESELECTED.append(len(items))
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    workeroutput = getattr(session.config, "workeroutput", None)
+    if workeroutput is not None:
+        workeroutput["deselected"] = sum(_DESELECTED)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node: Any, error: object) -> None:
+    _DESELECTED.append(-int(getattr(node, "workeroutput", {}).get("deselected", 0)))
+
+
+def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> None:
+    reported = [-n for n in _DESELECTED if n < 0]
+    if reported and max(reported):
+        terminalreporter.write_line(f"{max(reported)} deselected (`make deep` runs those marked deep)")
 
 
 def sampled(values: Iterable[Any], fast: Container[Any]) -> list[Any]:
@@ -204,11 +231,12 @@ def _scenarios_traced_once_per_content() -> Iterator[None]:
     original = traceability.trace
     memo: dict[object, traceability.Traceability] = {}
 
-    def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> traceability.Traceability:
+    def trace(spec: ir.Spec, roots: Sequence[Path | str],
+              progress: Callable[[str, int | None, int | None], None] | None = None) -> traceability.Traceability:
         files = scenario_files([r for r in roots if Path(r).exists()])
         key = (spec, tuple(str(r) for r in roots), tuple((str(f), f.read_bytes()) for f in files))
         if key not in memo:
-            memo[key] = original(spec, roots)
+            memo[key] = original(spec, roots, progress)
         return memo[key]
 
     with pytest.MonkeyPatch.context() as mp:

@@ -10,6 +10,7 @@ axis is in Shutdown, 64 - 3**3 = 37 of the 64.
 from __future__ import annotations
 
 import itertools
+import json
 from pathlib import Path
 
 import pytest
@@ -94,6 +95,11 @@ def test_cli_reports_the_hang_and_writes_replayable_counterexamples(tmp_path: Pa
     assert code == 1
     assert "from 37 of 64 start(s)" in out and "MSF(" in out and "erred: ERR 12, EXERR 12" in out
     assert main(["simulate", "-q", *sorted(str(p) for p in tmp_path.glob("*.yaml"))]) == 0
+    capsys.readouterr()
+    assert main(["check", "--system", "fault_recovery", "--json"]) == 1
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["states"] == 220 and doc["complete"] and doc["properties"][0]["holds"] is False
+    assert len(doc["properties"][0]["hanging_starts"]) == 37
 
 
 def test_cli_program_with_a_property(capsys) -> None:
@@ -133,6 +139,17 @@ def _starts(draw: st.DrawFn, axes: tuple[str, ...]) -> Start:
 def test_the_compiled_scan_is_the_engine_scan(text: str, data: st.DataObject) -> None:
     """Random programs and input/event sequences: every engine scan is the checker's successor
     under the same choice (so every engine run maps onto a path of the checker)."""
+    _same_scans(text, data)
+
+
+@pytest.mark.deep
+@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(text=programs(max_rungs=14), data=st.data())
+def test_the_compiled_scan_is_the_engine_scan_deep(text: str, data: st.DataObject) -> None:
+    _same_scans(text, data)
+
+
+def _same_scans(text: str, data: st.DataObject) -> None:
     program = parse_program_text("random.txt", text, spec=SPEC, form="neutral")
     axes = tuple(t.name for t in program.axes())
     names = {t.name for t in program.tags}
@@ -258,3 +275,34 @@ def test_integer_domains_computed_and_declared(tmp_path: Path) -> None:
     v = next(v for v in report.verdicts if v.prop.name == "domain of PARTS.ACC")
     assert v.holds is False and report.model.describe(report.graph.states[v.path[-1]])["PARTS.ACC"] == 5
     assert not report.graph.complete and report.exit_code == 1
+
+
+@pytest.fixture(scope="module")
+def cell_graph():
+    from checker.program_search import explore
+    system = load_program_system(EXAMPLES / "three_axis_cell.check.yaml", SPEC)
+    model = system.model(SPEC)
+    start = system.starts()[0]
+    return model, explore(model, [start]), start
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.fixed_dictionaries({n: st.booleans() for n in ("START_PB", "STOP_PB", "RESET_PB",
+                                                                               "ENABLE_SW")}),
+                          st.sampled_from([None, "X_axis", "Y_axis", "Z_axis"])), min_size=1, max_size=15))
+def test_every_engine_run_is_a_path_of_the_explored_graph(cell_graph, run) -> None:
+    """The engine (python-statemachine axes) driven by random button presses and axis faults: after
+    every scan its state is a state of the complete exploration, reached by an edge of the graph."""
+    model, graph, start = cell_graph
+    assert graph.complete
+    engine = model.engine(start)
+    u = graph.index[model.initial(start)]
+    events = 0
+    for writes, fault in run:
+        event = (fault, "axis_fault") if fault is not None and events < model.max_events else None
+        events += event is not None
+        engine.scan(events=(event,) if event else (), **writes)
+        s = (events, *model.encode(engine.system)[1:])
+        v = graph.index[s]
+        assert v in graph.succ[u]
+        u = v

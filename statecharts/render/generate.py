@@ -127,6 +127,7 @@ def build(
     render_svg: Callable[[str], bytes] | None = None,
     missing_renderer: str = "raise",
     aoi: Sequence[aoi_render.AoiDocument] = (),
+    progress: Callable[[str, int | None, int | None], None] | None = None,
 ) -> Artefacts:
     """Everything for ``out_dir`` (used for relative links and as the SVG cache).
 
@@ -138,7 +139,9 @@ def build(
     out and list it in ``Artefacts.unrendered``).
     """
     out = Path(out_dir)
-    tr: Traceability = trace(spec, scenario_roots)
+    tr: Traceability = trace(spec, scenario_roots, progress)
+    if progress is not None:
+        progress("writing the reference pages", None, None)
     tr = replace(tr, link_base=link_base(out, scenario_roots))
     text: dict[str, str] = {}
     dots: dict[str, str] = {}
@@ -181,7 +184,7 @@ def build(
     files = {k: v.encode("utf-8") for k, v in text.items()}
     unrendered: list[str] = []
     draw = render_svg or (lambda src: render(src, "svg"))
-    for stem, dot in sorted(dots.items()):
+    for n, (stem, dot) in enumerate(sorted(dots.items())):
         name = f"{stem}.svg"
         cached = out / name
         stamp = svg_stamp(dot).encode("utf-8")
@@ -192,6 +195,8 @@ def build(
         if old is not None and stamp in old[:400]:
             files[name] = old
             continue
+        if progress is not None:
+            progress(f"drawing {name}", n, len(dots))
         try:
             files[name] = stamped_svg(dot, draw(dot))
         except GraphvizNotFoundError:

@@ -16,7 +16,7 @@ being valid.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -88,61 +88,66 @@ def display_path(path: Path, root: Path) -> str:
         return p.name
 
 
-def trace(spec: ir.Spec, roots: Sequence[Path | str]) -> Traceability:
-    """Load and run every scenario under ``roots``; collect what each exercised."""
+def trace(spec: ir.Spec, roots: Sequence[Path | str],
+          progress: Callable[[str, int | None, int | None], None] | None = None) -> Traceability:
+    """Load and run every scenario under ``roots``; collect what each exercised.
+
+    ``progress(what, done, total)`` is called before each scenario runs."""
     runs: list[ScenarioRun] = []
     problems: list[ScenarioProblem] = []
     existing = [Path(r) for r in roots if Path(r).exists()]
     if not existing:
         return Traceability((), (), None)
-    for root in existing:
-        for f in scenario_files([root]):
-            shown = display_path(f, root)
-            try:
-                scenario = load_scenario(f, spec)
-            except InputError as exc:
-                first = exc.diagnostics[0] if exc.diagnostics else None
-                where = f"line {first.line}: {first.message}" if first else str(exc)
-                more = f" (and {len(exc.diagnostics) - 1} more)" if len(exc.diagnostics) > 1 else ""
-                problems.append(ScenarioProblem(shown, f"does not load: {where}{more}"))
-                continue
-            try:
-                result = run_scenario(scenario, spec)
-            except Exception as exc:
-                problems.append(ScenarioProblem(shown, f"crashed: {type(exc).__name__}: {exc}"))
-                continue
-            charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
-            instr = {p.tag: p.instruction for p in scenario.program}
-            instances: set[str] = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
-            states: set[tuple[str, str]] = set()
-            errors: set[tuple[str, int, int]] = set()
-            done: set[str] = set()
-            aoi_states: set[str] = set()
-            aoi_errors: set[tuple[int, int]] = set()
-            aoi_done = False
-            for row in result.rows:
-                for obj, fields in row.record.observations.items():
-                    if obj in instances:
-                        if isinstance(fields.get("state"), str):
-                            aoi_states.add(str(fields["state"]))
-                        if fields.get("Sts_ER"):
-                            aoi_errors.add((as_int(fields.get("Sts_ERR", 0)), as_int(fields.get("Sts_EXERR", 0))))
-                        aoi_done = aoi_done or bool(fields.get("Sts_PC"))
-                    elif obj in charts:
-                        chart = charts[obj]
-                        leaf = fields.get("state")
-                        if isinstance(leaf, str):
-                            states.update((chart.id, s) for s in chart.ancestors(leaf))
-                    elif obj in instr:
-                        if fields.get("ER"):
-                            errors.add((instr[obj], as_int(fields.get("ERR", 0)), as_int(fields.get("EXERR", 0))))
-                        if fields.get("DN"):
-                            done.add(instr[obj])
-            runs.append(ScenarioRun(
-                path=shown, name=scenario.name, passed=result.passed, scans=len(result.rows),
-                covers=scenario.covers, sources=scenario.sources, states=frozenset(states),
-                errors=frozenset(errors), done=frozenset(done), aoi_states=frozenset(aoi_states),
-                aoi_errors=frozenset(aoi_errors), aoi_done=aoi_done,
-            ))
+    todo = [(root, f) for root in existing for f in scenario_files([root])]
+    for n, (root, f) in enumerate(todo):
+        shown = display_path(f, root)
+        if progress is not None:
+            progress(f"running scenario {shown}", n, len(todo))
+        try:
+            scenario = load_scenario(f, spec)
+        except InputError as exc:
+            first = exc.diagnostics[0] if exc.diagnostics else None
+            where = f"line {first.line}: {first.message}" if first else str(exc)
+            more = f" (and {len(exc.diagnostics) - 1} more)" if len(exc.diagnostics) > 1 else ""
+            problems.append(ScenarioProblem(shown, f"does not load: {where}{more}"))
+            continue
+        try:
+            result = run_scenario(scenario, spec)
+        except Exception as exc:
+            problems.append(ScenarioProblem(shown, f"crashed: {type(exc).__name__}: {exc}"))
+            continue
+        charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
+        instr = {p.tag: p.instruction for p in scenario.program}
+        instances: set[str] = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
+        states: set[tuple[str, str]] = set()
+        errors: set[tuple[str, int, int]] = set()
+        done: set[str] = set()
+        aoi_states: set[str] = set()
+        aoi_errors: set[tuple[int, int]] = set()
+        aoi_done = False
+        for row in result.rows:
+            for obj, fields in row.record.observations.items():
+                if obj in instances:
+                    if isinstance(fields.get("state"), str):
+                        aoi_states.add(str(fields["state"]))
+                    if fields.get("Sts_ER"):
+                        aoi_errors.add((as_int(fields.get("Sts_ERR", 0)), as_int(fields.get("Sts_EXERR", 0))))
+                    aoi_done = aoi_done or bool(fields.get("Sts_PC"))
+                elif obj in charts:
+                    chart = charts[obj]
+                    leaf = fields.get("state")
+                    if isinstance(leaf, str):
+                        states.update((chart.id, s) for s in chart.ancestors(leaf))
+                elif obj in instr:
+                    if fields.get("ER"):
+                        errors.add((instr[obj], as_int(fields.get("ERR", 0)), as_int(fields.get("EXERR", 0))))
+                    if fields.get("DN"):
+                        done.add(instr[obj])
+        runs.append(ScenarioRun(
+            path=shown, name=scenario.name, passed=result.passed, scans=len(result.rows),
+            covers=scenario.covers, sources=scenario.sources, states=frozenset(states),
+            errors=frozenset(errors), done=frozenset(done), aoi_states=frozenset(aoi_states),
+            aoi_errors=frozenset(aoi_errors), aoi_done=aoi_done,
+        ))
     shown_root = ", ".join(sorted(Path(r).resolve().name for r in existing))
     return Traceability(tuple(sorted(runs)), tuple(sorted(problems)), shown_root)

@@ -243,6 +243,7 @@ class CompiledModel:
                 self._remap[ai] = dict(zip(theirs, own))
                 self._remap_back[ai] = dict(zip(own, theirs))
         self.canonical_fast = self._canonical_function()
+        self._single = self.naxes == 1 and not self.symmetric_groups and not self.use_block_memo
         self._group_of = [-1] * self.naxes
         for g, group in enumerate(self.symmetric_groups):
             for ai in group:
@@ -1036,7 +1037,7 @@ class CompiledModel:
             self._block_memo[self._leader[ai]].clear()
         memo[key] = value
 
-    def successors(self, state: State) -> list[tuple[int, State, list[Property], list[Property]]]:
+    def successors(self, state: State) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
         """(choice index, canonical successor, violated, reached) for the enabled choices.
 
         Choices whose successor is the same as the nothing choice's (and that violate
@@ -1047,6 +1048,20 @@ class CompiledModel:
         mode = COARSE if phase % self.spu == 0 else NORMAL
         nphase = (phase + 1) % self.spu
         naxes = self.naxes
+        if self._single:
+            # one axis, no symmetry: a successor is the phase followed by the block
+            (blk, b0, g0), mv = self.moves(0, state, mode)
+            head = (nphase,)
+            out1: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+                (self.nothing_index, head + blk, b0, g0)]
+            for c, b, x, y in mv:
+                out1.append((c, head + b, x, y))
+            if self.has_prescan and not self._busy[state[1]]:
+                self.where = (self.current, self.prescan_index)
+                n = self.block_len[0]
+                a2, t2, pb, pg = self._block(0, state[1], list(state[2:1 + n]), PRESCAN, NOTHING, 0, None)
+                out1.append((self.prescan_index, (nphase, a2, *t2), pb, pg))
+            return out1
         busy = False
         vec = [nphase]
         base_bad: list[Property] = []
@@ -1084,7 +1099,8 @@ class CompiledModel:
             if not busy and self._busy[state[start]]:
                 busy = True
         canonical = self.canonical_fast
-        out = [(self.nothing_index, canonical(vec), base_bad, base_good)]
+        out: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+            (self.nothing_index, canonical(vec), base_bad, base_good)]
         for ai, mv in enumerate(all_moves):
             if not mv:
                 continue

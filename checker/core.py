@@ -480,6 +480,11 @@ class CompiledModel:
                 names |= ins.done_when.names
             for ab in ins.aborts:
                 names |= ab.fails_when.names
+            if ins.process is not None:
+                # finishing a tag whose process runs reads its completion and end conditions
+                for e in (ins.process.complete_when, ins.process.ends_when):
+                    if e is not None:
+                        names |= e.names
             f = self._finish_proj[ti] = self.projector(ai, sorted(names))
         return f(core)
 

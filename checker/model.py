@@ -129,6 +129,10 @@ def relevant_variables(spec: ir.Spec, chart: ir.Chart, instructions: Iterable[ir
             need |= axis_reads(c.fails_when.names)
         if ins.done_when is not None:
             need |= axis_reads(ins.done_when.names)
+        if ins.process is not None:
+            for cond in (ins.process.complete_when, ins.process.ends_when):
+                if cond is not None:
+                    need |= axis_reads(cond.names)
         if ins.request is not None:
             for a in ins.request.actions:
                 writers.append((a.target[5:], frozenset(axis_reads(a.value.names))))

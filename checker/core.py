@@ -999,9 +999,11 @@ class CompiledModel:
         base = (base_blk, bad, good)
         out = []
         evmemo = self._event[ai]
+        drive_events = self._drive[ai]
         for c, kind, k, arg in choices:
             self.where = (cur, c)
-            if kind == EVENT:
+            # a drive event acts right after the tick, before the deliveries: no shortcut
+            if kind == EVENT and arg not in drive_events:
                 assert type(arg) is str  # an EVENT choice's argument is its event name
                 if coarse:
                     if events:

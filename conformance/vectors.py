@@ -32,7 +32,6 @@ Output is deterministic: the same spec and scenarios give byte-identical files.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
@@ -260,7 +259,8 @@ def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
         setup = {
             "scan_ms": scenario.scan_ms, "coarse_update_ms": scenario.coarse_update_ms,
             "axes": [_axis_entry(a.name, a.axis_type, a.chart, a.state, dict(a.variables)) for a in scenario.axes],
-            "program": [_program_entry(p.tag, p.instruction, p.axis, dict(p.operands)) for p in scenario.program],
+            "program": [_program_entry(p.tag, p.instruction, p.axis, dict(p.operands), p.master)
+                        for p in scenario.program],
         }
         rungs = {p.tag: False for p in scenario.program}
         inputs: list[dict[str, Any]] = []
@@ -307,8 +307,13 @@ def _axis_entry(name: str, axis_type: str, family: str, state: str | None, varia
     return entry
 
 
-def _program_entry(tag: str, mnemonic: str, axis: str, operands: dict[str, object]) -> dict[str, Any]:
-    return {"tag": tag, "instruction": mnemonic, "axis": axis, "operands": dict(sorted(operands.items()))}
+def _program_entry(tag: str, mnemonic: str, axis: str, operands: dict[str, object],
+                   master: str | None = None) -> dict[str, Any]:
+    entry: dict[str, Any] = {"tag": tag, "instruction": mnemonic, "axis": axis}
+    if master is not None:
+        entry["master"] = master
+    entry["operands"] = dict(sorted(operands.items()))
+    return entry
 
 
 # --------------------------------------------------------------------------- generated vectors
@@ -431,8 +436,8 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
         entry["rungs"] = dict(rungs)
         if c.kind == "raise" and c.operands:
             entry["operands"] = {c.tag: dict(c.operands)}
-        if c.kind == "event":
-            entry["events"] = [{"axis": c.axis, "event": c.event}]
+        if c.kind == "event" or c.drive:
+            entry["events"] = [{"axis": e.axis, "event": e.event} for e in c.inputs.events]
         if c.kind == "prescan":
             entry["prescan"] = True
         inputs.append(entry)
@@ -541,15 +546,37 @@ def build_suite(spec: ir.Spec, *, scenarios: Sequence[Path | str] = ("scenarios"
     return suite
 
 
-def spec_digest(spec: ir.Spec) -> str:
+def suite_digest(roots: Sequence[Path | str]) -> str:
+    """A name for what a suite is generated from: the files under ``roots`` (the spec and
+    the scenarios) and the source of the code that generates and runs it."""
     h = hashlib.sha256()
-    for f in sorted(spec.files):
-        p = Path(f)
-        name = p.name
-        h.update(name.encode())
-        with contextlib.suppress(OSError):
-            h.update(p.read_bytes())
+    code = [Path(__file__).resolve().parent.parent / d for d in ("statecharts", "checker", "conformance")]
+    for root in [*map(Path, roots), *code]:
+        if not root.is_dir():
+            continue
+        for p in sorted(root.rglob("*")):
+            if p.is_file() and p.suffix in (".yaml", ".yml", ".json", ".py") and "__pycache__" not in p.parts:
+                h.update(p.relative_to(root).as_posix().encode())
+                h.update(p.read_bytes())
     return h.hexdigest()[:16]
+
+
+def cached_suite(cache: Path, roots: Sequence[Path | str], build: Callable[[], Suite]) -> Path:
+    """The suite directory ``cache/vectors-<digest>``, built with ``build`` the first time;
+    concurrent callers (test workers, parallel runs) wait for the one that builds it."""
+    import fcntl
+    d = Path(cache) / f"vectors-{suite_digest(roots)}"
+    if (d / "manifest.json").is_file():
+        return d
+    d.parent.mkdir(parents=True, exist_ok=True)
+    with open(d.parent / f".{d.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            if not (d / "manifest.json").is_file():
+                write_suite(build(), d)
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    return d
 
 
 def manifest(suite: Suite) -> dict[str, Any]:

@@ -10,6 +10,7 @@ to it; the expected codes are the convention's, not read from the implementation
 from __future__ import annotations
 
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
@@ -140,3 +141,162 @@ def test_generate(tmp_path: Path, broken_spec: Path, capsys: pytest.CaptureFixtu
     assert code == 1 and "unresolvable source" in err
     assert _run(["generate", "--no-such-option"], capsys)[0] == 2
     assert _run(["generate", "--scenarios", "no/such/dir"], capsys)[0] == 2
+
+
+# --------------------------------------------------------------------------- check and export
+
+_SMALL_SYSTEM = """\
+format: motionchart-system/1
+name: tiny
+scan_ms: 10
+coarse_update_ms: 10
+axes:
+  - name: Axis
+    type: AXIS_SERVO
+    program: [MSO, MASD, MASR]
+environment: [servo_fault, fault_cleared]
+prescan: false
+max_live_calls: 1
+abstraction:
+  collapse: [ServoOutput, DriveOutputCommand]
+"""
+
+# false on purpose: on a faulted axis MSO is refused with ERR 20 (ICS code 20)
+_FALSE_PROPERTY = """\
+format: motionchart-properties/1
+properties:
+  - name: mso_never_errs
+    kind: invariant
+    scope: tag
+    instruction: MSO
+    holds: "not ER"
+    source: "MC tests/test_cli_exit_codes.py (deliberately false)"
+"""
+
+
+# holds in the model: an MSO tag never has DN and ER set together
+_TRUE_PROPERTY = _FALSE_PROPERTY.replace("mso_never_errs", "mso_not_done_and_errored").replace(
+    '"not ER"', '"not (DN and ER)"').replace("deliberately false", "holds")
+
+
+@pytest.fixture()
+def tiny_system(tmp_path: Path) -> Path:
+    path = tmp_path / "tiny.yaml"
+    path.write_text(_SMALL_SYSTEM, encoding="utf-8")
+    return path
+
+
+def test_check(tmp_path: Path, tiny_system: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    holds = tmp_path / "true.yaml"
+    holds.write_text(_TRUE_PROPERTY, encoding="utf-8")
+    code, out, err = _run(["check", "--system", str(tiny_system), "--properties", str(holds), "-q"], capsys)
+    assert code == 0, out + err
+    props = tmp_path / "false.yaml"
+    props.write_text(_FALSE_PROPERTY, encoding="utf-8")
+    code, out, _ = _run(["check", "--system", str(tiny_system), "--properties", str(props), "-q"], capsys)
+    assert code == 1 and "VIOLATED mso_never_errs" in out  # a finding
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(_SMALL_SYSTEM.replace("[MSO, MASD, MASR]", "[MSO, MXYZ]"), encoding="utf-8")
+    code, _, err = _run(["check", "--system", str(bad), "-q"], capsys)
+    assert code == 1 and f"{bad}:" in err  # invalid input, located
+    assert _run(["check", "--system", "no_such_system"], capsys)[0] == 2
+    assert _run(["check", "--axes", "0"], capsys)[0] == 2
+    assert _run(["check", "--max-states", "20", "--system", str(tiny_system), "--properties", str(holds), "-q"],
+                capsys)[0] == 3
+
+
+def test_export(tmp_path: Path, tiny_system: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "tiny.pml"
+    code, _, err = _run(["export", "--system", str(tiny_system), "-o", str(out)], capsys)
+    assert code == 0, err
+    assert out.stat().st_size > 0
+    # export reports no findings (it writes a model); invalid input and usage errors:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(_SMALL_SYSTEM.replace("[MSO, MASD, MASR]", "[MSO, MXYZ]"), encoding="utf-8")
+    code, _, err = _run(["export", "--system", str(bad), "-o", str(tmp_path / "bad.pml")], capsys)
+    assert code == 1 and f"{bad}:" in err
+    assert _run(["export", "--format", "nusmv"], capsys)[0] == 2
+    assert _run(["export", "--system", "no_such_system"], capsys)[0] == 2
+
+
+# --------------------------------------------------------------------------- conformance commands
+
+ADAPTER = f"{sys.executable} -m checker adapter"
+
+
+@pytest.fixture()
+def one_vector(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> Path:
+    """A suite of one vector: the MSO scenario above (no checker-generated vectors)."""
+    scenarios = tmp_path / "scenarios"
+    scenarios.mkdir()
+    _scenario(scenarios, "good.yaml", "ServoControl")
+    out = tmp_path / "vectors"
+    code, _, err = _run(["vectors", "-o", str(out), "--scenarios", str(scenarios), "--no-generated", "-q"], capsys)
+    assert code == 0, err
+    return out
+
+
+def test_vectors(tmp_path: Path, one_vector: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert (one_vector / "manifest.json").is_file()
+    bad = tmp_path / "bad_scenarios"
+    bad.mkdir()
+    (bad / "broken.yaml").write_text(_SCENARIO.replace("instruction: MSO", "instruction: MXYZ"), encoding="utf-8")
+    code, _, err = _run(["vectors", "-o", str(tmp_path / "v2"), "--scenarios", str(bad), "--no-generated", "-q"],
+                        capsys)
+    assert code == 1 and "broken.yaml" in err  # invalid input
+    assert _run(["vectors"], capsys)[0] == 2  # -o is required
+    assert _run(["vectors", "-o", str(tmp_path / "v3"), "--system", "no_such_system"], capsys)[0] == 2
+    assert _run(["vectors", "-o", str(tmp_path / "v4"), "--scenarios", "no/such/dir"], capsys)[0] == 2
+
+
+def test_conform(tmp_path: Path, one_vector: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert _run(["conform", "--adapter", ADAPTER, "--vectors", str(one_vector), "-q"], capsys)[0] == 0
+    # a finding: the vector expects another state than the implementation reaches
+    wrong = tmp_path / "wrong"
+    shutil.copytree(one_vector, wrong)
+    vector = wrong / "scenario-good.json"
+    vector.write_text(vector.read_text(encoding="utf-8").replace('"AxisState": 2', '"AxisState": 0'),
+                      encoding="utf-8")
+    assert _run(["conform", "--adapter", ADAPTER, "--vectors", str(wrong), "-q"], capsys)[0] == 1
+    broken = tmp_path / "broken"
+    shutil.copytree(one_vector, broken)
+    (broken / "scenario-good.json").write_text("{not json", encoding="utf-8")
+    code, _, err = _run(["conform", "--adapter", ADAPTER, "--vectors", str(broken), "-q"], capsys)
+    assert code == 1 and "scenario-good.json" in err  # invalid input
+    assert _run(["conform", "--vectors", str(one_vector)], capsys)[0] == 2  # --adapter is required
+    assert _run(["conform", "--adapter", ADAPTER, "--vectors", "no/such/dir"], capsys)[0] == 2
+
+
+def test_adapter(broken_spec: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    import io
+
+    hello = '{"type":"hello","protocol":"motionchart-conformance/1"}\n'
+    monkeypatch.setattr(sys, "stdin", io.StringIO(hello + '{"type":"bye"}\n'))
+    code, out, _ = _run(["adapter"], capsys)
+    assert code == 0 and '"type": "hello"' in out.replace('"type":"hello"', '"type": "hello"')
+    # a message that is not JSON is answered in band (the protocol's error message); the
+    # adapter keeps serving, so it is no exit code of its own
+    monkeypatch.setattr(sys, "stdin", io.StringIO("not json\n"))
+    code, out, _ = _run(["adapter"], capsys)
+    assert code == 0 and '"error"' in out
+    monkeypatch.setattr(sys, "stdin", io.StringIO(""))
+    code, _, err = _run(["adapter", "--spec", str(broken_spec)], capsys)
+    assert code == 1 and "unresolvable source" in err
+    assert _run(["adapter", "--mutant", "no-such-mutant"], capsys)[0] == 2
+    assert _run(["adapter", "--no-such-option"], capsys)[0] == 2
+
+
+def test_mutate(tmp_path: Path, one_vector: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, _out, err = _run(["mutate", "--score", "--vectors", str(one_vector), "--sample", "3", "--min-score", "0",
+                           "--quiet"], capsys)
+    assert code == 0, err
+    # a finding: one vector cannot kill every mutant, so a required score of 1 is not met
+    code, _, _ = _run(["mutate", "--score", "--vectors", str(one_vector), "--sample", "3", "--min-score", "1",
+                       "--quiet"], capsys)
+    assert code == 1
+    broken = tmp_path / "broken"
+    shutil.copytree(one_vector, broken)
+    (broken / "scenario-good.json").write_text("{not json", encoding="utf-8")
+    assert _run(["mutate", "--score", "--vectors", str(broken), "--quiet"], capsys)[0] == 1
+    assert _run(["mutate"], capsys)[0] == 2  # nothing to do without --score
+    assert _run(["mutate", "--score", "--vectors", "no/such/dir"], capsys)[0] == 2

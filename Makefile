@@ -70,6 +70,7 @@ generate: install
 bench: install
 	@$(BIN)/python benchmarks/startup.py
 	@$(BIN)/python benchmarks/bench.py
+	@$(BIN)/python benchmarks/spin_bench.py
 	@$(BIN)/motionchart vectors -q -o .bench/vectors >/dev/null
 	@$(BIN)/motionchart mutate --score --quiet --vectors .bench/vectors
 

@@ -36,12 +36,16 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from checker.search import progress_wanted
-from statecharts.aoi import schema_object
 from statecharts.diagnostics import Diagnostic, InputError, locate, node_path
 from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
 from statecharts.loader import plain_data, read_yaml, schema_diagnostics
 
 AOI_SYSTEM_FORMAT = "motionchart-aoi-system/1"
+
+
+def schema_object(required: list[str], props: dict[str, Any]) -> dict[str, Any]:
+    """A JSON Schema object with exactly ``props``, of which ``required`` must be present."""
+    return {"type": "object", "additionalProperties": False, "required": list(required), "properties": dict(props)}
 PROGRESS_EVERY = 2000
 
 _SOURCE = {"type": "string", "minLength": 1}
@@ -352,7 +356,7 @@ def explore_aoi(system: AoiSystem, spec: Any, *, max_states: int | None = None, 
     rungs, parents, depths = [rung0], [-1], [0]
     verdicts = [Verdict(p, True) for p in system.properties]
     codes = tuple(sorted(code for code, _name in spec.errors))
-    rstates = tuple(s.id for s in spec.states)
+    rstates = tuple(s.id for s in spec.add_on.recovery.states)
     result = AoiResult(system, 0, 0, 0, 0.0, True, "", verdicts, parents, moves, rungs, depths,
                        codes=codes, recovery_states=rstates)
 

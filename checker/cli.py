@@ -141,15 +141,12 @@ def _missing(paths: Sequence[str]) -> list[str]:
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
+    """Load the whole spec, its add-on instructions included; every problem is reported.
+
+    With directories, the motion instructions the add-on instructions call
+    (``instructions/motion/``) are those of every given directory that has them."""
+    from statecharts.aoi import load_motion_calls
     from statecharts.loader import load_spec
-
-    """Load the spec and the add-on instructions that go with it; every problem of both is reported.
-
-    The add-on instructions (``spec/aoi/`` with the motion instructions they call,
-    ``spec/instructions/motion/``) are those of the bundled spec when no path is given,
-    else those of every given directory that has ``aoi/`` or ``instructions/motion/``.
-    """
-    from statecharts.render.aoi import load_aoi_documents
 
     missing = _missing(args.paths)
     if missing:
@@ -167,17 +164,14 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         spec = load_spec(args.paths or None)
     except InputError as exc:
         problems.extend(exc.diagnostics)
-    aoi_docs = []
-    progress.update("loading the add-on instructions")
-    try:
-        aoi_docs = load_aoi_documents(args.paths or None)
-    except InputError as exc:
-        # The add-on instruction loader reads the main spec's charts for its world and
-        # quotes the main spec's first error when they do not load: that is no new problem.
-        seen = [str(d) for d in problems]
-        problems.extend(d for d in exc.diagnostics if not any(text in d.message for text in seen))
+    dirs = [Path(p) for p in args.paths if (Path(p) / "instructions" / "motion").is_dir()] if args.paths else [None]
+    progress.update("loading the motion instructions the add-on instructions call")
+    for motion_dir in dirs:
+        try:
+            load_motion_calls(motion_dir)
+        except InputError as exc:
+            problems.extend(exc.diagnostics)
     progress.close()
-    # a YAML error in spec/aoi/ or spec/instructions/motion/ is found by both loaders: report it once
     problems = list(dict.fromkeys(problems))
     if problems or spec is None:
         if args.json:
@@ -188,6 +182,7 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
             print(d, file=sys.stderr)
         print(f"{len(problems)} error(s)", file=sys.stderr)
         return EXIT_FAIL
+    add_ons = [_add_on_summary(a) for a in spec.add_ons]
     summary: dict[str, object] = {
         "valid": True,
         "files": len(spec.files),
@@ -198,21 +193,37 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         "checks": sum(len(i.checks) for i in spec.instructions),
         "error_codes": len(spec.errors),
         "interpretations": len(spec.interpretations),
-        "add_on_instructions": [d.summary() for d in aoi_docs],
+        "add_on_instructions": add_ons,
     }
     if args.json:
         json.dump(summary, out, indent=2, sort_keys=True)
         out.write("\n")
     else:
-        out.write(
+        line = (
             f"spec OK: {summary['files']} files, {len(spec.charts)} chart(s) "
             f"({summary['states']} states, {summary['transitions']} transitions), "
             f"{len(spec.instructions)} instructions ({summary['checks']} checks), "
-            f"{summary['error_codes']} error codes, {summary['interpretations']} interpretations\n"
+            f"{summary['error_codes']} error codes, {summary['interpretations']} interpretations"
         )
-        if aoi_docs:
-            out.write(_aoi_line(aoi_docs) + "\n")
+        for a in add_ons:
+            line += (f", add-on instruction {a['id']} ({a['checks']} checks, {a['error_codes']} codes, "
+                     f"{a['recovery_states']} recovery states, {a['recovery_transitions']} transitions; "
+                     f"calls {', '.join(a['calls'])})")  # type: ignore[arg-type]  # a list of mnemonics
+        out.write(line + "\n")
     return EXIT_OK
+
+
+def _add_on_summary(a: Any) -> dict[str, object]:
+    """What ``validate`` says of one add-on instruction (``a``: an ``ir.AddOnInstruction``)."""
+    from statecharts.loader import bundled_spec_dir
+
+    calls = sorted({s.call.instruction for s in a.recovery.states if s.call} | {a.rung_false.abort_call} - {None})
+    root = bundled_spec_dir()
+    file = Path(a.location.file)
+    shown = f"spec/{file.relative_to(root).as_posix()}" if file.is_relative_to(root) else file.name
+    return {"id": a.id, "file": shown, "checks": len(a.checks), "error_codes": len(a.errors),
+            "recovery_states": len(a.recovery.states), "recovery_transitions": len(a.recovery.transitions),
+            "calls": calls}
 
 
 def _is_program_file(path: str) -> bool:
@@ -265,17 +276,6 @@ def _validate_programs(args: argparse.Namespace, out: TextIO) -> int:
     if problems:
         print(f"{len(problems)} error(s)", file=sys.stderr)
     return EXIT_FAIL if problems else EXIT_OK
-
-
-def _aoi_line(docs: Sequence[Any]) -> str:
-    """``add-on instructions: 1 (17 checks, 21 codes, 8 recovery states, 9 transitions), 5 sub-instructions``."""
-    checks = sum(len(d.checks) for d in docs)
-    codes = sum(len(d.errors) for d in docs)
-    states = sum(len(d.states) for d in docs)
-    transitions = sum(len(d.transitions) for d in docs)
-    subs = sum(len(d.subs) for d in docs)
-    return (f"add-on instructions: {len(docs)} ({checks} checks, {codes} codes, {states} recovery states, "
-            f"{transitions} transitions), {subs} sub-instructions")
 
 
 def _print_table(result: ScenarioResult, out: TextIO) -> None:

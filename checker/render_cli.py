@@ -8,7 +8,7 @@ returns its exit code (``None`` for a command that is not one of these).
   [--part NAME] [--spec PATH]``: a chart's state diagram, or, for an instruction mnemonic (``MSO``), its
   flowchart (``--part overview`` or a composite state's id for a large chart, ``part1`` ... for a long
   flowchart);
-  for an add-on instruction (``spec/aoi/``), ``<ID>`` draws its flowchart and
+  for an add-on instruction (``spec/addons/``), ``<ID>`` draws its flowchart and
   ``<ID>_recovery`` its recovery chart.
   The format defaults to the output file's suffix (``.dot``/``.gv``, ``.svg``, ``.png``,
   ``.mmd``), else ``dot``.  Without ``-o`` the text goes to standard output; PNG needs
@@ -17,7 +17,7 @@ returns its exit code (``None`` for a command that is not one of these).
   with its diagrams.
 
 The add-on instructions documented with a spec are those of the bundled spec (no
-``--spec``) or of each ``--spec`` directory that has ``aoi/`` or
+``--spec``) or of each ``--spec`` directory that has ``addons/`` or
 ``instructions/motion/`` (:func:`statecharts.render.aoi.aoi_spec_dirs`).
 * ``motionchart generate [-o DIR] [--check] [--scenarios DIR] [--spec PATH]``: every
   artefact into ``generated/``; ``--check`` regenerates into a temporary directory,

@@ -50,7 +50,7 @@ from checker.promela import PromelaModel, build
 from checker.search import Coverage, SearchResult, Witness
 
 #: the compiler flags of every build (one process, safety properties only)
-BASE_FLAGS = ("-O2", "-w", "-DSAFETY", "-DNOREDUCE", "-DNOFAIR")
+BASE_FLAGS = ("-O2", "-w", "-DSAFETY", "-DNOREDUCE", "-DNOFAIR", "-DNOBOUNDCHECK")
 
 
 class SpinError(RuntimeError):
@@ -113,6 +113,8 @@ class PanStats:
     depth: int = 0
     errors: int = 0
     seconds: float = 0.0
+    #: CPU seconds of pan and its worker processes (user + system)
+    cpu_seconds: float = 0.0
     memory_mb: float = 0.0
     complete: bool = True
     stop_reason: str | None = None
@@ -125,7 +127,7 @@ _STORED = re.compile(r"^\s*(\d+) states, stored", re.M)
 _TRANS = re.compile(r"^\s*(\d+) transitions \(= ", re.M)
 _DEPTH = re.compile(r"depth reached (\d+)")
 _ERRORS = re.compile(r"errors: (\d+)")
-_ELAPSED = re.compile(r"pan: elapsed time ([0-9.e+]+) seconds")
+_ELAPSED = re.compile(r"elapsed time ([0-9.e+]+) seconds")
 _MEMORY = re.compile(r"^\s*([0-9.]+)\s+total actual memory usage", re.M)
 _ASSERT = re.compile(r"pan:\d+: assertion violated \(viol ?!= ?(\d+)\)")
 _WROTE = re.compile(r"pan: wrote (\S+\.trail)")
@@ -143,7 +145,7 @@ def parse_pan(text: str, workdir: Path) -> PanStats:
     errs = [int(x) for x in _ERRORS.findall(text)]
     st.errors = max(errs) if errs else 0
     el = _ELAPSED.findall(text)
-    st.seconds = float(el[-1]) if el else 0.0
+    st.seconds = max(float(x) for x in el) if el else 0.0
     mem = _MEMORY.findall(text)
     st.memory_mb = float(mem[-1]) if mem else 0.0
     pending: list[int] = []
@@ -207,13 +209,18 @@ def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions, extra_flags:
     if spin is None or cc is None:
         raise SpinError(missing_tools() or "SPIN is missing")
     t0 = time.perf_counter()
-    (workdir / "model.pml").write_text(pm.text, encoding="ascii")
+    (workdir / "model.pml").write_text(pm.text.replace("TABLES.", "model_tables."), encoding="ascii")
+    objects: list[str] = []
+    if pm.tables is not None:
+        (workdir / "model_tables.c").write_text(pm.tables, encoding="ascii")
+        _run([cc, "-c", "-O0", "-w", "-o", "model_tables.o", "model_tables.c"], workdir, "the C compiler (tables)")
+        objects.append("model_tables.o")
     _run([spin, "-a", "model.pml"], workdir, "spin -a")
     flags = opts.flags() + (extra_flags or [])
     vector = 16 + 6 * pm.core.naxes + len(pm.model.slots)
     if vector > 900:
         flags.append(f"-DVECTORSZ={vector + 128}")
-    _run([cc, *flags, "-o", "pan", "pan.c"], workdir, "the C compiler")
+    _run([cc, *flags, "-o", "pan", "pan.c", *objects], workdir, "the C compiler")
     return workdir / "pan", flags, time.perf_counter() - t0
 
 
@@ -230,9 +237,14 @@ def run_pan(pan: Path, workdir: Path, opts: SpinOptions, pm: PromelaModel, extra
     if opts.max_seconds is not None:
         args.append(f"-Q{max(1, math.ceil(opts.max_seconds / 60))}")
     args += extra or []
+    import resource
+
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     out = _run(args, workdir, "pan", timeout=None if opts.max_seconds is None else opts.max_seconds + 30)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
     st = parse_pan(out, workdir)
-    if re.search(r"pan: (?:elapsed|rate)", out) is None and st.states == 0:
+    st.cpu_seconds = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    if re.search(r"elapsed time|pan: rate", out) is None and st.states == 0:
         tail = "\n".join(out.strip().splitlines()[-12:])
         raise SpinError(f"pan did not report a result:\n{tail}")
     if opts.bitstate or opts.swarm:

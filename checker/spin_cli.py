@@ -117,7 +117,7 @@ def export(args: argparse.Namespace, out: TextIO) -> int:
             sysdef = sysdef.scaled(args.axes)
         props = load_properties(spec, args.properties)
         model = Model(spec, sysdef, props, symmetry=False if args.no_symmetry else None)
-        pm = build(model)
+        pm = build(model, side_tables=None if args.output is not None else False)
     except (InputError, ModelError) as exc:
         for d in exc.diagnostics:
             print(d, file=sys.stderr)
@@ -128,8 +128,16 @@ def export(args: argparse.Namespace, out: TextIO) -> int:
     if args.output is None:
         out.write(pm.text)
     else:
-        atomic_write_text(Path(args.output), pm.text)
-        print(f"wrote {args.output}: {pm.model.sysdef.name}, {pm.blocks:,} blocks, "
+        target = Path(args.output)
+        written = [args.output]
+        if pm.tables is not None:
+            tables = target.with_name(target.stem + "_tables.c")
+            atomic_write_text(tables, pm.tables)
+            written.append(str(tables))
+            atomic_write_text(target, pm.text.replace("TABLES.", target.stem + "_tables."))
+        else:
+            atomic_write_text(target, pm.text)
+        print(f"wrote {' and '.join(written)}: {pm.model.sysdef.name}, {pm.blocks:,} blocks, "
               f"{len(pm.properties)} asserted properties", file=sys.stderr)
     return EXIT_OK
 

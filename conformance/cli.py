@@ -13,7 +13,6 @@ failure), 1 otherwise; ``mutate --score`` 0 when the score reaches ``--min-score
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import os
 import sys
@@ -143,26 +142,18 @@ def _vectors(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def default_suite_dir(quiet: bool = False) -> Path:
-    """The bundled suite, generated once per spec and scenario content into the user cache."""
+    """The bundled suite, generated once per spec, scenario and code content into the user cache."""
     from conformance import vectors as vec
-    from statecharts.loader import bundled_spec_dir
-    h = hashlib.sha256()
+    from statecharts.loader import bundled_spec_dir, load_spec
     roots = [bundled_spec_dir()] + ([Path("scenarios")] if Path("scenarios").is_dir() else [])
-    for root in roots:
-        for p in sorted(root.rglob("*")):
-            if p.is_file() and p.suffix in (".yaml", ".yml", ".json"):
-                h.update(p.relative_to(root).as_posix().encode())
-                h.update(p.read_bytes())
-    h.update(Path(vec.__file__).read_bytes())
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "motionchart"
-    d = cache / f"vectors-{h.hexdigest()[:16]}"
-    if not (d / "manifest.json").is_file():
-        from statecharts.loader import load_spec
+
+    def build() -> vec.Suite:
         if not quiet:
-            print(f"conform: generating the bundled suite into {d} (once; a few minutes)", file=sys.stderr)
-        suite = vec.build_suite(load_spec(), scenarios=list(roots[1:]), progress=_progress(quiet))
-        vec.write_suite(suite, d)
-    return d
+            print(f"conform: generating the bundled suite into {cache} (once; a minute or two)", file=sys.stderr)
+        return vec.build_suite(load_spec(), scenarios=list(roots[1:]), progress=_progress(quiet))
+
+    return vec.cached_suite(cache, roots, build)
 
 
 def _conform(args: argparse.Namespace, out: TextIO) -> int:

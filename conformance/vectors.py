@@ -32,7 +32,6 @@ Output is deterministic: the same spec and scenarios give byte-identical files.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
@@ -541,15 +540,37 @@ def build_suite(spec: ir.Spec, *, scenarios: Sequence[Path | str] = ("scenarios"
     return suite
 
 
-def spec_digest(spec: ir.Spec) -> str:
+def suite_digest(roots: Sequence[Path | str]) -> str:
+    """A name for what a suite is generated from: the files under ``roots`` (the spec and
+    the scenarios) and the source of the code that generates and runs it."""
     h = hashlib.sha256()
-    for f in sorted(spec.files):
-        p = Path(f)
-        name = p.name
-        h.update(name.encode())
-        with contextlib.suppress(OSError):
-            h.update(p.read_bytes())
+    code = [Path(__file__).resolve().parent.parent / d for d in ("statecharts", "checker", "conformance")]
+    for root in [*map(Path, roots), *code]:
+        if not root.is_dir():
+            continue
+        for p in sorted(root.rglob("*")):
+            if p.is_file() and p.suffix in (".yaml", ".yml", ".json", ".py") and "__pycache__" not in p.parts:
+                h.update(p.relative_to(root).as_posix().encode())
+                h.update(p.read_bytes())
     return h.hexdigest()[:16]
+
+
+def cached_suite(cache: Path, roots: Sequence[Path | str], build: Callable[[], Suite]) -> Path:
+    """The suite directory ``cache/vectors-<digest>``, built with ``build`` the first time;
+    concurrent callers (test workers, parallel runs) wait for the one that builds it."""
+    import fcntl
+    d = Path(cache) / f"vectors-{suite_digest(roots)}"
+    if (d / "manifest.json").is_file():
+        return d
+    d.parent.mkdir(parents=True, exist_ok=True)
+    with open(d.parent / f".{d.name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            if not (d / "manifest.json").is_file():
+                write_suite(build(), d)
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+    return d
 
 
 def manifest(suite: Suite) -> dict[str, Any]:

@@ -1,13 +1,13 @@
-"""The raM_Opr_SyncPthPhyAx_CD add-on instruction: spec loader, world model and runner.
+"""The raM_Opr_SyncPthPhyAx_CD add-on instruction: world model and runner.
 
-Pipeline position: ``spec/aoi/*.yaml`` (``format: motionchart-aoi/1``) and
-``spec/instructions/motion/*.yaml`` (``format: motionchart-subinstruction/1``) ->
-**this module** (schema + expression checks -> frozen :class:`AoiSpec`) -> :class:`World`
-(device handlers on the DeviceHandler chart, a physical axis on AxisCIP and a path
-axis on AxisVirtual, run by the engine through the spec's `world:` bindings, the motion
-planner's numbers, AOI instances, one PLC scan at a time) ->
-scenarios of ``format: motionchart-aoi-scenario/1`` (run by ``motionchart simulate``
-through :mod:`statecharts.scenario`).  The main spec loader skips these formats.
+Pipeline position: ``spec/addons/*.yaml`` (an ``add_on_instruction:`` section of the spec
+language, built by :mod:`statecharts.addon_loader` into :class:`statecharts.ir.AddOnInstruction`)
+and ``spec/instructions/motion/*.yaml`` (the motion instructions as the recovery calls
+them) -> **this module** -> :class:`World` (device handlers on the DeviceHandler chart, a
+physical axis on AxisCIP and a path axis on AxisVirtual, run by the engine through the
+add-on instruction's `world:` facts, the motion planner's numbers, AOI instances, one
+PLC scan at a time) -> scenarios (run by ``motionchart simulate`` through
+:mod:`statecharts.scenario`).
 
 Per scan and per AOI instance, in program order: registration with the handler named by
 Ref_Handle (if not yet registered); then the prescan routine, the rung-false routine, or
@@ -31,282 +31,92 @@ import jsonschema
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, SpecError, locate, node_path
 from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
-from statecharts.loader import bundled_spec_dir, plain_data, read_yaml, schema_diagnostics
+from statecharts.loader import bundled_spec_dir, load_spec, plain_data, read_yaml, schema_diagnostics
 from statecharts.rotary import effective_move_type, signed_distance, unwind
 from statecharts.values import as_float, as_int
 
-AOI_FORMAT = "motionchart-aoi/1"
 SUB_FORMAT = "motionchart-subinstruction/1"
 SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
-
-_ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
-_EXPR = {"type": "string", "minLength": 1}
-_SOURCE = {"type": "string", "minLength": 1}
-_INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$"}
-_SCALAR = {"type": ["boolean", "integer", "number", "string"]}
-_PROV = {"source": _SOURCE, "interpretation": _INTERP}
+_SCHEMA_DIR = bundled_spec_dir() / "schema"
 
 
-def schema_object(required: Sequence[str], props: Mapping[str, Any]) -> dict[str, Any]:
-    """A JSON Schema object with exactly ``props``, of which ``required`` must be present."""
-    return {"type": "object", "additionalProperties": False, "required": list(required), "properties": dict(props)}
+@functools.cache
+def _schema(name: str) -> dict[str, Any]:
+    return cast("dict[str, Any]", json.loads((_SCHEMA_DIR / name).read_text(encoding="utf-8")))
 
 
-AOI_SCHEMA: dict[str, Any] = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "https://motionchart.invalid/schema/aoi-1.json",
-    "description": "An add-on instruction: operands, tag type, error codes, ordered checks, recovery chart.",
-    **schema_object(["format", "aoi"], {
-        "format": {"const": AOI_FORMAT},
-        "aoi": schema_object(["id", "source", "execution", "inputs", "outputs", "errors", "checks", "recovery", "on_done",
-                     "rung_false", "prescan", "world"], {
-            "id": _ID, **_PROV, "execution": {"enum": ["level", "edge"]}, "execution_source": _SOURCE,
-            "inputs": {"type": "array", "items": schema_object(["name", "type", "source"], {
-                "name": _ID, "type": {"enum": ["axis", "handle", "BOOL", "DINT", "REAL"]}, "data_type": _ID,
-                "default": _SCALAR, **_PROV})},
-            "outputs": {"type": "array", "items": schema_object(["name", "type", "source"], {
-                "name": _ID, "type": {"enum": ["BOOL", "DINT"]}, **_PROV})},
-            "errors": {"type": "array", "items": schema_object(["code", "name", "source"], {
-                "code": {"type": "integer"}, "name": {"type": "string"}, **_PROV})},
-            "checks": {"type": "array", "items": schema_object(["id", "code", "fails", "source"], {
-                "id": _ID, "code": {"type": "integer"}, "applies": {"type": "integer"}, "fails": _EXPR, **_PROV})},
-            "recovery": schema_object(["initial", "states", "transitions", "source"], {
-                "initial": _ID, **_PROV,
-                "states": {"type": "array", "items": schema_object(["id", "source"], {
-                    "id": _ID, "description": {"type": "string"}, "error": {"type": "integer"},
-                    "call": schema_object(["instruction", "axis"], {
-                        "instruction": _ID, "axis": {"enum": ["phy", "pth"]}, "master": {"enum": ["phy", "pth"]},
-                        "operands": {"type": "object", "additionalProperties": {"type": ["number", "string"]}}}),
-                    **_PROV})},
-                "transitions": {"type": "array", "items": schema_object(["from", "to", "when", "source"], {
-                    "from": _ID, "to": _ID, "when": _EXPR, **_PROV})}}),
-            "on_done": {"type": "array", "items": schema_object(["when", "set", "source"], {
-                "when": _EXPR, "set": {"enum": ["path_verified", "handler.OnPath"]}, **_PROV})},
-            "rung_false": schema_object(["clear", "source"], {
-                "clear": {"type": "array", "items": _ID}, "abort_call": _ID, **_PROV}),
-            "prescan": schema_object(["clear", "source"], {
-                "clear": {"type": "array", "items": _ID}, "forget": {"type": "array", "items": _ID}, **_PROV}),
-            "world": schema_object(["objects", "source"], {
-                **_PROV,
-                "objects": {"type": "array", "minItems": 1, "items": schema_object(["kind", "chart", "facts", "source"], {
-                    "kind": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL", "handler"]}, "chart": _ID, **_PROV,
-                    "on_scan": {"type": "array", "items": _ID}, "stop": {"type": "array", "items": _ID},
-                    "register": {"type": "array", "items": _ID},
-                    "setup": schema_object(["rules"], {
-                        "variables": {"type": "object", "additionalProperties": _EXPR},
-                        "rules": {"type": "array", "items": schema_object(["when"], {
-                            "when": _EXPR, "state": _ID,
-                            "variables": {"type": "object", "additionalProperties": _EXPR}})},
-                        "then_set": {"type": "array", "items": _ID}}),
-                    "facts": {"type": "array", "items": schema_object(["name", "source"], {
-                        "name": _ID, "when": _EXPR, "variable": _ID, **_PROV,
-                        "set": {"type": "array", "items": schema_object(["value", "fire"], {
-                            "value": _SCALAR, "fire": {"type": "array", "minItems": 1, "items": _ID}})}})},
-                })},
-            }),
-        }),
-    }),
-}
-
-SUB_SCHEMA: dict[str, Any] = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "https://motionchart.invalid/schema/subinstruction-1.json",
-    "description": "A motion instruction as the add-on instruction calls it: ordered preconditions and completion.",
-    **schema_object(["format", "instruction"], {
-        "format": {"const": SUB_FORMAT},
-        "instruction": schema_object(["mnemonic", "name", "source", "axis_types", "checks", "completes"], {
-            "mnemonic": _ID, "name": {"type": "string"}, **_PROV,
-            "axis_types": {"type": "array", "items": _ID},
-            "checks": {"type": "array", "items": schema_object(["fails", "err", "source"], {
-                "fails": _EXPR, "err": {"type": "integer", "minimum": 1}, **_PROV})},
-            "completes": schema_object(["kind", "source"], {
-                "kind": {"enum": ["home", "move", "gear", "redefine", "stop"]},
-                "scans": {"type": "integer", "minimum": 1}, **_PROV}),
-        }),
-    }),
-}
-
-_AXIS_PROPS: dict[str, dict[str, Any]] = {
-    "type": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL"]},
-    "position": {"type": "number"}, "velocity": {"type": "number"}, "unwind": {"type": "number", "minimum": 0},
-    "homed": {"type": "boolean"}, "energized": {"type": "boolean"}, "faulted": {"type": "boolean"},
-    "shutdown": {"type": "boolean"}, "control_mode": {"enum": ["position", "velocity", "torque", "frequency", "none"]},
-    "direct_control": {"type": "boolean"}, "home_config_ok": {"type": "boolean"}, "home_position": {"type": "number"},
-    "homing": {"type": "boolean"},
-}
-_HANDLER_PROPS: dict[str, dict[str, Any]] = {
-    "id": {"type": "integer", "minimum": 0}, "registered": {"type": "integer", "minimum": 0},
-    "capacity": {"type": "integer", "minimum": 0}, "eState": {"type": "integer"},
-    "mode": {"enum": ["physical", "virtual", "none", "maintenance"]},
-    "phy_axis": _ID, "pth_axis": _ID, "OnPath": {"type": "boolean"},
-}
-_CHART_SETUP = {
-    "state": {**_ID, "description": "start the chart in this state instead of the one the fields give"},
-    "variables": {"type": "object", "propertyNames": _ID, "additionalProperties": _SCALAR,
-                  "description": "chart variables, applied after the state's entry actions"},
-    "events": {"type": "array", "items": _ID, "description": "chart events fired after the set-up, in order"},
-}
-_INPUT_VALUES = {"type": ["boolean", "integer", "number", "string"]}
-SCENARIO_SCHEMA: dict[str, Any] = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "https://motionchart.invalid/schema/aoi-scenario-1.json",
-    "description": "Handlers, axes and add-on instruction instances, then scans with expected observations.",
-    **schema_object(["format", "name", "setup", "steps"], {
-        "format": {"const": SCENARIO_FORMAT}, "name": {"type": "string", "minLength": 1},
-        "description": {"type": "string"}, "sources": {"type": "array", "items": {"type": "string"}},
-        "covers": {"type": "array", "items": {"type": "string"}},
-        "setup": schema_object(["handlers", "axes", "aoi"], {
-            "scan_ms": {"type": "integer", "minimum": 1},
-            "handlers": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                         "additionalProperties": schema_object(["id"], {**_HANDLER_PROPS, **_CHART_SETUP})},
-            "axes": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                     "additionalProperties": schema_object(["type"], {**_AXIS_PROPS, **_CHART_SETUP})},
-            "aoi": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                    "additionalProperties": {"type": "object", "propertyNames": _ID,
-                                             "additionalProperties": _INPUT_VALUES}},
-        }),
-        "steps": {"type": "array", "minItems": 1, "items": schema_object([], {
-            "name": {"type": "string"}, "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
-            "prescan": {"type": "boolean"},
-            "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
-            "operands": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _INPUT_VALUES}},
-            "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
-            "events": {"type": "object", "additionalProperties": {"type": "array", "minItems": 1, "items": _ID}},
-            "expect": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
-        })},
-    }),
-}
-
-#: Names the check and transition expressions may read besides the inputs.
-WORLD_NAMES = frozenset(
-    {"registered", "path_verified", "distance.magnitude", "move.type", "move.target", "call.done"}
-    | {f"handler.{k}" for k in ("eState", "mode", "phy_axis", "pth_axis", "OnPath")}
-    | {f"{a}.{k}" for a in ("phy", "pth") for k in (*_AXIS_PROPS, "rotary", "geared", "name")}
-)
+_SETUP = _schema("aoi-scenario.schema.json")["properties"]["setup"]["properties"]
+_CHART_SETUP_FIELDS = ("state", "variables", "events")
+#: A scenario's axis and handler fields and their JSON Schemas.
+_AXIS_PROPS: dict[str, Any] = {k: v for k, v in _SETUP["axes"]["additionalProperties"]["properties"].items()
+                               if k not in _CHART_SETUP_FIELDS}
+_HANDLER_PROPS: dict[str, Any] = {k: v for k, v in _SETUP["handlers"]["additionalProperties"]["properties"].items()
+                                  if k not in _CHART_SETUP_FIELDS}
 #: Names a sub-instruction's checks may read besides its operands.
 SUB_NAMES = frozenset({f"{a}.{k}" for a in ("axis", "master") for k in (*_AXIS_PROPS, "rotary", "geared", "name")})
-
-
-# --------------------------------------------------------------------------- IR
-
-
-@dataclass(frozen=True, slots=True)
-class AoiCheck:
-    id: str
-    code: int
-    applies: int | None
-    fails: Expr
-    source: str
-    interpretation: str | None
-
-
-@dataclass(frozen=True, slots=True)
-class Call:
-    instruction: str
-    axis: str
-    master: str | None
-    operands: tuple[tuple[str, Expr], ...]
-
-
-@dataclass(frozen=True, slots=True)
-class RecoveryState:
-    id: str
-    call: Call | None
-    error: int | None
-    source: str
-
-
-@dataclass(frozen=True, slots=True)
-class RecoveryTransition:
-    source_state: str
-    target: str
-    when: Expr
 
 
 @dataclass(frozen=True, slots=True)
 class SubCheck:
     fails: Expr
     err: int
-    source: str
+    provenance: ir.Provenance
+    location: ir.Location
 
 
 @dataclass(frozen=True, slots=True)
 class SubInstruction:
     mnemonic: str
     name: str
+    axis_types: tuple[str, ...]
     checks: tuple[SubCheck, ...]
     kind: str
     scans: int
-    source: str
+    provenance: ir.Provenance
+    location: ir.Location
+    completes: ir.Provenance
+    completes_location: ir.Location
 
 
-@dataclass(frozen=True, slots=True)
-class FactBinding:
-    """One fact of a world object read from its chart (``when`` or ``variable``) and how it is set."""
-    name: str
-    when: Expr | None
-    variable: str | None
-    sets: tuple[tuple[object, tuple[str, ...]], ...]  # (value, chart events to fire)
-    source: str
-    interpretation: str | None
-
-
-@dataclass(frozen=True, slots=True)
-class ObjectBinding:
-    """How the objects of one kind (an axis data type, or the handler) are run by a chart."""
-    kind: str
-    chart: str
-    facts: tuple[FactBinding, ...]
-    on_scan: tuple[str, ...]
-    stop: tuple[str, ...]
-    register: tuple[str, ...]
-    source: str
-    #: set-up: chart variables from the scenario's fields, ordered rules (when, state,
-    #: variables), then the facts given their value through `set`
-    setup_variables: tuple[tuple[str, Expr], ...] = ()
-    setup_rules: tuple[tuple[Expr, str | None, tuple[tuple[str, Expr], ...]], ...] = ()
-    then_set: tuple[str, ...] = ()
-
-    def fact(self, name: str) -> FactBinding | None:
-        return next((f for f in self.facts if f.name == name), None)
-
-
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True)
 class AoiSpec:
-    id: str
-    inputs: tuple[tuple[str, str, object], ...]  # (name, type, default)
-    outputs: tuple[tuple[str, str], ...]
-    errors: tuple[tuple[int, str], ...]
-    checks: tuple[AoiCheck, ...]
-    initial: str
-    states: tuple[RecoveryState, ...]
-    transitions: tuple[RecoveryTransition, ...]
-    on_done: tuple[tuple[Expr, str], ...]
-    rung_false_clear: tuple[str, ...]
-    abort_call: str | None
-    prescan_clear: tuple[str, ...]
-    prescan_forget: tuple[str, ...]
+    """The add-on instruction of a loaded spec, with the motion instructions its recovery calls."""
+
+    add_on: ir.AddOnInstruction
     instructions: tuple[SubInstruction, ...]
-    bindings: tuple[ObjectBinding, ...] = ()
+    main: ir.Spec = field(compare=False, repr=False)
     #: the spec directory the charts of the world come from (None: the bundled spec)
     spec_dir: str | None = field(default=None, compare=False)
 
-    def binding(self, kind: str) -> ObjectBinding:
-        return next(b for b in self.bindings if b.kind == kind)
+    @property
+    def id(self) -> str:
+        return self.add_on.id
 
-    def state(self, sid: str) -> RecoveryState:
-        return next(s for s in self.states if s.id == sid)
+    @property
+    def inputs(self) -> tuple[tuple[str, str, object], ...]:
+        return tuple((p.name, p.type, p.default) for p in self.add_on.parameters)
+
+    @property
+    def outputs(self) -> tuple[tuple[str, str], ...]:
+        return tuple((m.name, m.type) for m in self.add_on.status)
+
+    @property
+    def errors(self) -> tuple[tuple[int, str], ...]:
+        return tuple((e.code, e.name) for e in self.add_on.errors)
+
+    def binding(self, kind: str) -> ir.WorldObject:
+        return self.add_on.world.object(kind)
 
     def instruction(self, mnemonic: str) -> SubInstruction:
         return next(i for i in self.instructions if i.mnemonic == mnemonic)
 
     def input_type(self, name: str) -> str:
-        return next(t for n, t, _ in self.inputs if n == name)
+        return self.add_on.parameter(name).type
 
 
 def _exprs(f: str, tree: Any, parts: tuple[Any, ...], text: str, known: frozenset[str],
            errors: list[Diagnostic]) -> Expr | None:
-    line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
+    line, col = locate(tree, parts)
     try:
         e = parse_expression(text)
     except ExprError as exc:
@@ -320,274 +130,101 @@ def _exprs(f: str, tree: Any, parts: tuple[Any, ...], text: str, known: frozense
     return e
 
 
-def _check_interpretations(f: str, tree: Any, errors: list[Diagnostic], root: Path) -> None:
-    """Every `interpretation:` the file cites must exist in interpretations.yaml."""
-    known: set[str] = set()
-    doc = read_yaml(root / "interpretations.yaml", [])
-    listed = plain_data(doc).get("interpretations") if isinstance(doc, Mapping) else None
-    if not isinstance(listed, list):
-        return  # interpretations.yaml itself is wrong: the spec loader reports that
-    known = {str(i.get("id")) for i in listed if isinstance(i, dict)}
-    stack: list[tuple[Any, tuple[Any, ...]]] = [(tree, ())]
-    while stack:
-        node, parts = stack.pop()
-        if isinstance(node, Mapping):
-            cited = node.get("interpretation")
-            if isinstance(cited, str) and cited not in known:
-                line, col = locate(tree, (*parts, "interpretation")) if hasattr(tree, "lc") else (1, 1)
-                errors.append(Diagnostic(f, line, col, node_path((*parts, "interpretation")),
-                                         f"unknown interpretation {cited!r}; add it to interpretations.yaml"))
-            stack.extend((v, (*parts, k)) for k, v in node.items())
-        elif isinstance(node, list):
-            stack.extend((v, (*parts, i)) for i, v in enumerate(node))
-
-
-def aoi_files(spec_dir: Path | None = None) -> tuple[list[Path], list[Path]]:
+def load_motion_calls(spec_dir: Path | None = None) -> tuple[SubInstruction, ...]:
+    """The motion instructions as the recovery calls them (spec/instructions/motion/)."""
     root = spec_dir or bundled_spec_dir()
-    return (sorted((root / "aoi").glob("*.yaml")), sorted((root / "instructions" / "motion").glob("*.yaml")))
+    errors: list[Diagnostic] = []
+    subs: list[SubInstruction] = []
+    for p in sorted((root / "instructions" / "motion").glob("*.yaml")):
+        f = str(p)
+        before = len(errors)
+        tree = read_yaml(p, errors)
+        if tree is None:
+            continue
+        errors.extend(schema_diagnostics(f, tree, _schema("subinstruction.schema.json"), "a sub-instruction file"))
+        if len(errors) > before:
+            continue
+        d = plain_data(tree)["instruction"]
+        names = SUB_NAMES | {"MoveType", "Speed", "Position", "Position.finite", "Speed.finite"}
+
+        def where(*parts: Any, f: str = f, tree: Any = tree) -> ir.Location:
+            return ir.Location(f, *locate(tree, parts), node_path(parts))
+
+        def prov(n: Mapping[str, Any]) -> ir.Provenance:
+            return ir.Provenance(str(n["source"]), n.get("interpretation"))
+
+        checks = []
+        for i, c in enumerate(d["checks"]):
+            e = _exprs(f, tree, ("instruction", "checks", i, "fails"), c["fails"], names, errors)
+            if e is not None:
+                checks.append(SubCheck(e, int(c["err"]), prov(c), where("instruction", "checks", i)))
+        if d["mnemonic"] in {x.mnemonic for x in subs}:
+            errors.append(Diagnostic(f, *locate(tree, ("instruction", "mnemonic")), "instruction.mnemonic",
+                                     f"sub-instruction {d['mnemonic']!r} is defined twice"))
+        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(d["axis_types"]), tuple(checks),
+                                   d["completes"]["kind"], int(d["completes"].get("scans", 1)), prov(d),
+                                   where("instruction"), prov(d["completes"]), where("instruction", "completes")))
+    if errors:
+        raise SpecError(errors)
+    return tuple(subs)
+
+
+def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
+    """The add-on instruction of the spec in ``spec_dir`` (the bundled one by default); SpecError with every problem."""
+    root = Path(spec_dir) if spec_dir else None
+    problems: list[Diagnostic] = []
+    try:
+        main = load_spec([root]) if root else load_spec()
+    except SpecError as exc:
+        problems.extend(exc.diagnostics)
+        main = None
+    try:
+        subs = load_motion_calls(root)
+    except SpecError as exc:
+        problems.extend(exc.diagnostics)
+        subs = ()
+    if problems:
+        raise SpecError(problems)
+    assert main is not None
+    if not main.add_ons:
+        raise SpecError([Diagnostic(str(root or bundled_spec_dir()), 1, 1, "", "the spec defines no add_on_instruction")])
+    known = {s.mnemonic for s in subs}
+    add_on = main.add_ons[0]
+    for st in add_on.recovery.states:
+        if st.call is not None and st.call.instruction not in known:
+            problems.append(Diagnostic(st.location.file, st.location.line, st.location.column, st.location.path,
+                                       f"unknown sub-instruction {st.call.instruction!r}; known: {', '.join(sorted(known))}"))
+    if problems:
+        raise SpecError(problems)
+    return AoiSpec(add_on, subs, main, None if spec_dir is None else str(spec_dir))
+
+
+_FOR_SPEC: dict[int, tuple[ir.Spec, AoiSpec]] = {}
+
+
+def for_spec(spec: ir.Spec) -> AoiSpec:
+    """The add-on instruction of a loaded spec, with the motion calls of the directory it came from."""
+    hit = _FOR_SPEC.get(id(spec))
+    if hit is not None and hit[0] is spec:
+        return hit[1]
+    bundled = bundled_aoi()
+    if spec is bundled.main:
+        return bundled
+    if not spec.add_ons:
+        raise SpecError([Diagnostic(spec.files[0] if spec.files else "spec", 1, 1, "",
+                                    "the spec defines no add_on_instruction")])
+    root = Path(spec.add_ons[0].location.file).parent.parent
+    subs = load_motion_calls(root) if (root / "instructions" / "motion").is_dir() else bundled.instructions
+    out = AoiSpec(spec.add_ons[0], subs, spec, str(root))
+    _FOR_SPEC.clear()
+    _FOR_SPEC[id(spec)] = (spec, out)
+    return out
 
 
 @functools.lru_cache(maxsize=1)
 def bundled_aoi() -> AoiSpec:
     """The bundled add-on instruction spec, loaded once per process (it is immutable)."""
     return load_aoi()
-
-
-def _check_sources(name: str, tree: Any, errors: list[Diagnostic], spec_dir: Path) -> None:
-    """Every ``source:`` of the file must resolve to the sources registry of its spec."""
-    from statecharts import sources
-
-    registry, problems = sources.registry_for([spec_dir / sources.SOURCES_FILE]
-                                              if (spec_dir / sources.SOURCES_FILE).is_file() else [])
-    errors.extend(problems)
-    if registry is not None:
-        errors.extend(sources.tree_source_diagnostics(name, tree, registry))
-
-
-def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
-    """Load the add-on instruction and its sub-instructions; raise SpecError with every problem."""
-    aoi_paths, sub_paths = aoi_files(Path(spec_dir) if spec_dir else None)
-    errors: list[Diagnostic] = []
-    subs: list[SubInstruction] = []
-    for p in sub_paths:
-        f = str(p)
-        before = len(errors)
-        tree = read_yaml(p, errors)
-        if tree is None:
-            continue
-        errors.extend(schema_diagnostics(f, tree, SUB_SCHEMA, "a sub-instruction file"))
-        if len(errors) > before:
-            continue
-        _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
-        _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
-        d = plain_data(tree)["instruction"]
-        sub_checks: list[SubCheck] = []
-        for i, c in enumerate(d["checks"]):
-            names = SUB_NAMES | {"MoveType", "Speed", "Position", "Position.finite", "Speed.finite"}
-            e = _exprs(f, tree, ("instruction", "checks", i, "fails"), c["fails"], names, errors)
-            if e is not None:
-                sub_checks.append(SubCheck(e, int(c["err"]), c["source"]))
-        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(sub_checks), d["completes"]["kind"],
-                                   int(d["completes"].get("scans", 1)), d["source"]))
-    if len(aoi_paths) != 1:
-        errors.append(Diagnostic(str(bundled_spec_dir() / "aoi"), 1, 1, "", f"expected one add-on instruction file, found {len(aoi_paths)}"))
-        raise SpecError(errors)
-    p = aoi_paths[0]
-    f = str(p)
-    before = len(errors)
-    tree = read_yaml(p, errors)
-    if tree is None:
-        raise SpecError(errors)
-    errors.extend(schema_diagnostics(f, tree, AOI_SCHEMA, "an add-on instruction file"))
-    if len(errors) > before:
-        raise SpecError(errors)
-    d = plain_data(tree)["aoi"]
-    inputs = tuple((i["name"], i["type"], i.get("default")) for i in d["inputs"])
-    input_names = {n for n, _, _ in inputs}
-    known = WORLD_NAMES | input_names | {f"{n}.finite" for n, t, _ in inputs if t == "REAL"}
-    codes = {e["code"] for e in d["errors"]}
-    checks: list[AoiCheck] = []
-    for i, c in enumerate(d["checks"]):
-        if c["code"] not in codes:
-            errors.append(Diagnostic(f, *locate(tree, ("aoi", "checks", i, "code")), f"aoi.checks[{i}].code",
-                                     f"code {c['code']} is not in aoi.errors"))
-        e = _exprs(f, tree, ("aoi", "checks", i, "fails"), c["fails"], known, errors)
-        if e is not None:
-            checks.append(AoiCheck(c["id"], c["code"], c.get("applies"), e, c["source"], c.get("interpretation")))
-    mnemonics = {s.mnemonic for s in subs}
-    states: list[RecoveryState] = []
-    for i, s in enumerate(d["recovery"]["states"]):
-        call = None
-        if "call" in s:
-            c = s["call"]
-            if c["instruction"] not in mnemonics:
-                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "states", i, "call")), f"aoi.recovery.states[{i}].call",
-                                         f"unknown sub-instruction {c['instruction']!r}; known: {', '.join(sorted(mnemonics))}"))
-            ops = []
-            for k, v in c.get("operands", {}).items():
-                e = _exprs(f, tree, ("aoi", "recovery", "states", i, "call", "operands", k), str(v), known, errors)
-                if e is not None:
-                    ops.append((k, e))
-            call = Call(c["instruction"], c["axis"], c.get("master"), tuple(ops))
-            if "error" not in s:
-                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "states", i)), f"aoi.recovery.states[{i}]",
-                                         "a state with a call needs `error`"))
-        states.append(RecoveryState(s["id"], call, s.get("error"), s["source"]))
-    ids = {s.id for s in states}
-    for need in ("idle", "checking", "done", d["recovery"]["initial"]):
-        if need not in ids:
-            errors.append(Diagnostic(f, 1, 1, "aoi.recovery.states", f"the recovery chart needs a state {need!r}"))
-    transitions = []
-    for i, t in enumerate(d["recovery"]["transitions"]):
-        for k in ("from", "to"):
-            if t[k] not in ids:
-                errors.append(Diagnostic(f, *locate(tree, ("aoi", "recovery", "transitions", i, k)),
-                                         f"aoi.recovery.transitions[{i}].{k}", f"unknown state {t[k]!r}"))
-        e = _exprs(f, tree, ("aoi", "recovery", "transitions", i, "when"), t["when"], known, errors)
-        if e is not None:
-            transitions.append(RecoveryTransition(t["from"], t["to"], e))
-    on_done = []
-    for i, o in enumerate(d["on_done"]):
-        e = _exprs(f, tree, ("aoi", "on_done", i, "when"), o["when"], known, errors)
-        if e is not None:
-            on_done.append((e, o["set"]))
-    _check_interpretations(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
-    _check_sources(f, tree, errors, Path(spec_dir) if spec_dir else bundled_spec_dir())
-    abort = d["rung_false"].get("abort_call")
-    if abort is not None and abort not in mnemonics:
-        errors.append(Diagnostic(f, 1, 1, "aoi.rung_false.abort_call", f"unknown sub-instruction {abort!r}"))
-    bindings = _load_bindings(f, tree, d["world"], None if spec_dir is None else str(spec_dir), errors)
-    if errors:
-        raise SpecError(errors)
-    return AoiSpec(
-        id=d["id"], inputs=inputs, outputs=tuple((o["name"], o["type"]) for o in d["outputs"]),
-        errors=tuple((e["code"], e["name"]) for e in d["errors"]), checks=tuple(checks),
-        initial=d["recovery"]["initial"], states=tuple(states), transitions=tuple(transitions),
-        on_done=tuple(on_done), rung_false_clear=tuple(d["rung_false"]["clear"]), abort_call=abort,
-        prescan_clear=tuple(d["prescan"]["clear"]), prescan_forget=tuple(d["prescan"].get("forget", [])),
-        instructions=tuple(subs), bindings=bindings, spec_dir=None if spec_dir is None else str(spec_dir),
-    )
-
-
-#: The facts the world reads from every object of a kind (the others are the planner's).
-REQUIRED_FACTS: dict[str, frozenset[str]] = {
-    "AXIS_CIP_DRIVE": frozenset({"faulted", "shutdown", "energized", "tracking", "starting"}),
-    "AXIS_VIRTUAL": frozenset({"faulted", "shutdown", "energized", "tracking", "starting"}),
-    "handler": frozenset({"eState", "mode", "OnPath", "registered", "capacity"}),
-}
-#: Facts an object may have besides the required ones.
-OPTIONAL_FACTS: dict[str, frozenset[str]] = {
-    "AXIS_CIP_DRIVE": frozenset({"homed", "homing", "direct_control", "moving"}),
-    "AXIS_VIRTUAL": frozenset({"homed", "homing", "direct_control", "moving"}),
-    "handler": frozenset({"running"}),
-}
-
-
-@functools.lru_cache(maxsize=4)
-def main_spec(spec_dir: str | None = None) -> Any:
-    """The main spec whose charts run the world: ``spec_dir``'s when it has charts, else the bundled one."""
-    from statecharts.loader import load_spec
-    if spec_dir is not None and (Path(spec_dir) / "charts").is_dir():
-        return load_spec([spec_dir])
-    return load_spec()
-
-
-def _load_bindings(f: str, tree: Any, world: Mapping[str, Any], spec_dir: str | None,
-                   errors: list[Diagnostic]) -> tuple[ObjectBinding, ...]:
-    """The `world` section: every chart, variable, event and fact name checked against the charts."""
-    def err(parts: tuple[Any, ...], message: str) -> None:
-        line, col = locate(tree, parts) if hasattr(tree, "lc") else (1, 1)
-        errors.append(Diagnostic(f, line, col, node_path(parts), message))
-
-    try:
-        charts = {c.id: c for c in main_spec(spec_dir).charts}
-    except SpecError as exc:
-        err(("aoi", "world"), f"the charts of the world cannot be loaded: {exc.diagnostics[0]}")
-        return ()
-    out: list[ObjectBinding] = []
-    kinds: set[str] = set()
-    for i, o in enumerate(world["objects"]):
-        p: tuple[Any, ...] = ("aoi", "world", "objects", i)
-        if o["kind"] in kinds:
-            err((*p, "kind"), f"a second binding for {o['kind']}")
-        kinds.add(o["kind"])
-        chart = charts.get(o["chart"])
-        if chart is None:
-            err((*p, "chart"), f"unknown chart {o['chart']!r}; charts: {', '.join(sorted(charts))}")
-            continue
-        if any(st.kind.value == "history" for st in chart.states):
-            err((*p, "chart"), f"chart {chart.id} has history states; the world restores charts from snapshots, "
-                               "which do not hold history")
-        variables = {v.name for v in chart.variables}
-        events = {e.name for e in chart.events}
-        names = frozenset(variables | {"active", "state"})
-        for key in ("on_scan", "stop", "register"):
-            for j, ev in enumerate(o.get(key, [])):
-                if ev not in events:
-                    err((*p, key, j), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
-        facts: list[FactBinding] = []
-        allowed = REQUIRED_FACTS[o["kind"]] | OPTIONAL_FACTS[o["kind"]]
-        for j, fb in enumerate(o["facts"]):
-            q = (*p, "facts", j)
-            if fb["name"] not in allowed:
-                err((*q, "name"), f"{o['kind']} has no fact {fb['name']!r}; facts: {', '.join(sorted(allowed))}")
-            if ("when" in fb) == ("variable" in fb):
-                err(q, "a fact needs exactly one of `when` (an expression) and `variable` (a chart variable)")
-                continue
-            when = None
-            if "when" in fb:
-                when = _exprs(f, tree, (*q, "when"), fb["when"], names, errors)
-                if when is None:
-                    continue
-            elif fb["variable"] not in variables:
-                err((*q, "variable"), f"chart {chart.id} has no variable {fb['variable']!r}")
-                continue
-            sets = []
-            for k, sv in enumerate(fb.get("set", [])):
-                for m, ev in enumerate(sv["fire"]):
-                    if ev not in events:
-                        err((*q, "set", k, "fire", m), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
-                sets.append((sv["value"], tuple(sv["fire"])))
-            facts.append(FactBinding(fb["name"], when, fb.get("variable"), tuple(sets), fb["source"],
-                                     fb.get("interpretation")))
-        missing = REQUIRED_FACTS[o["kind"]] - {fb["name"] for fb in o["facts"]}
-        if missing:
-            err((*p, "facts"), f"{o['kind']} needs the fact(s) {', '.join(sorted(missing))}")
-        fields = frozenset(_HANDLER_PROPS if o["kind"] == "handler" else _AXIS_PROPS)
-        states = {st.id for st in chart.states}
-
-        def assignments(node: Mapping[str, str], parts: tuple[Any, ...], variables: set[str] = variables,
-                        chart: ir.Chart = chart, fields: frozenset[str] = fields) -> tuple[tuple[str, Expr], ...]:
-            got = []
-            for name, text in node.items():
-                if name not in variables:
-                    err((*parts, name), f"chart {chart.id} has no variable {name!r}")
-                    continue
-                e = _exprs(f, tree, (*parts, name), text, fields, errors)
-                if e is not None:
-                    got.append((name, e))
-            return tuple(got)
-
-        su = o.get("setup", {"rules": []})
-        base = assignments(su.get("variables", {}), (*p, "setup", "variables"))
-        rules = []
-        for j, r in enumerate(su["rules"]):
-            q = (*p, "setup", "rules", j)
-            if "state" in r and r["state"] not in states:
-                err((*q, "state"), f"chart {chart.id} has no state {r['state']!r}")
-            e = _exprs(f, tree, (*q, "when"), r["when"], fields, errors)
-            if e is not None:
-                rules.append((e, r.get("state"), assignments(r.get("variables", {}), (*q, "variables"))))
-        for j, name in enumerate(su.get("then_set", [])):
-            if name not in {fb.name for fb in facts}:
-                err((*p, "setup", "then_set", j), f"{name!r} is not a fact of {o['kind']}")
-        out.append(ObjectBinding(o["kind"], chart.id, tuple(facts), tuple(o.get("on_scan", [])),
-                                 tuple(o.get("stop", [])), tuple(o.get("register", [])), o["source"],
-                                 base, tuple(rules), tuple(su.get("then_set", []))))
-    for need in REQUIRED_FACTS:
-        if need not in kinds:
-            err(("aoi", "world", "objects"), f"the world needs a binding for {need}")
-    return tuple(out)
 
 
 # --------------------------------------------------------------------------- world
@@ -664,7 +301,7 @@ class ChartRunner:
     def leaf(self, active: frozenset[str]) -> tuple[str, int | None]:
         return next((sid, value) for sid, value in self._leaves if sid in active)
 
-    def facts(self, binding: ObjectBinding, snap: Snap) -> dict[str, object]:
+    def facts(self, binding: ir.WorldObject, snap: Snap) -> dict[str, object]:
         """Every fact of ``binding`` on the configuration ``snap``."""
         key = (id(binding), snap)
         hit = self._facts.get(key)
@@ -700,7 +337,7 @@ class ChartObject:
     #: facts kept by the object itself when its binding does not read them from the chart
     PLAIN: ClassVar[dict[str, object]] = {}
 
-    def __init__(self, name: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
+    def __init__(self, name: str, binding: ir.WorldObject, runner: ChartRunner, snap: Snap) -> None:
         self.name = name
         self.binding = binding
         self.runner = runner
@@ -759,7 +396,8 @@ class ChartObject:
             self.snap = self.runner.assign(self.snap, fb.variable, value)
             self._after_chart()
             return
-        for v, events in fb.sets:
+        for fs in fb.set:
+            v, events = fs.value, fs.fire
             if v == value and type(v) is type(value):
                 for e in events:
                     self.fire(e)
@@ -777,7 +415,7 @@ class Axis(ChartObject):
 
     PLAIN: ClassVar[dict[str, object]] = {"homed": True, "homing": False, "direct_control": False}
 
-    def __init__(self, name: str, type: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap) -> None:
+    def __init__(self, name: str, type: str, binding: ir.WorldObject, runner: ChartRunner, snap: Snap) -> None:
         super().__init__(name, binding, runner, snap)
         self.type = type
         self.position = 0.0
@@ -880,7 +518,7 @@ class Axis(ChartObject):
 class Handler(ChartObject):
     """A device handler: its DeviceHandler chart plus its id and associated axes (configuration)."""
 
-    def __init__(self, name: str, binding: ObjectBinding, runner: ChartRunner, snap: Snap, *, id: int = 1,
+    def __init__(self, name: str, binding: ir.WorldObject, runner: ChartRunner, snap: Snap, *, id: int = 1,
                  phy_axis: str = "", pth_axis: str = "") -> None:
         super().__init__(name, binding, runner, snap)
         self.id = id
@@ -1066,9 +704,9 @@ class World:
             self._register(inst)
             if prescan:
                 self._rung_false(inst)
-                for n in self.spec.prescan_clear:
+                for n in self.spec.add_on.prescan.clear:
                     inst.outputs[n] = False if isinstance(inst.outputs[n], bool) else 0
-                if "path_verified" in self.spec.prescan_forget:
+                if "path_verified" in self.spec.add_on.prescan.forget:
                     inst.path_verified = False
                 inst.state = "idle"
             elif rungs.get(inst.name, False):
@@ -1087,10 +725,10 @@ class World:
         inst.outputs["Sts_MtdID"] = inst.registrations.get(h.name, 0) if h else 0
 
     def _rung_false(self, inst: Instance) -> None:
-        if inst.call is not None and not inst.call.done and self.spec.abort_call:
+        if inst.call is not None and not inst.call.done and self.spec.add_on.rung_false.abort_call:
             self._issue_stop(inst)
         inst.call = None
-        for n in self.spec.rung_false_clear:
+        for n in self.spec.add_on.rung_false.clear:
             inst.outputs[n] = False
         inst.state = "idle"
 
@@ -1113,21 +751,18 @@ class World:
             return
         if inst.state == "idle":
             inst.outputs.update(Sts_ER=False, Sts_ERR=0, Sts_EXERR=0, Sts_PC=False, Sts_IP=False)
-            inst.state = self.spec.initial
+            inst.state = self.spec.add_on.recovery.initial
         env = self.env(inst)
         if inst.state == "checking":
-            sync = inst.inputs.get("Cfg_SyncType")
-            for c in self.spec.checks:
-                if c.applies is not None and c.applies != sync:
-                    continue
-                if c.fails(env):
-                    self._error(inst, c.code)
+            for c in self.spec.add_on.checks:
+                if c.fails_when(env):
+                    self._error(inst, c.err)
                     return
             inst.move_type = as_int(env["move.type"])
             inst.move_target = as_float(env["move.target"])
-        for _ in range(len(self.spec.states) + 1):
-            nxt = next((t.target for t in self.spec.transitions
-                        if t.source_state == inst.state and t.when(env)), None)
+        for _ in range(len(self.spec.add_on.recovery.states) + 1):
+            nxt = next((t.target for t in self.spec.add_on.recovery.transitions
+                        if t.source == inst.state and t.when(env)), None)
             if nxt is None:
                 return
             self._enter(inst, nxt)
@@ -1138,11 +773,12 @@ class World:
     def _enter(self, inst: Instance, sid: str) -> None:
         inst.state = sid
         inst.call = None
-        st = self.spec.state(sid)
+        st = self.spec.add_on.recovery.state(sid)
         if sid == "done":
             env = self.env(inst)
-            for when, target in self.spec.on_done:
-                if when(env):
+            for od in self.spec.add_on.on_done:
+                if od.when(env):
+                    target = od.set
                     if target == "path_verified":
                         inst.path_verified = True
                     elif target == "handler.OnPath":
@@ -1314,7 +950,7 @@ def _set_rank(item: tuple[str, object]) -> tuple[int, str]:
     return (SET_ORDER.index(item[0]) if item[0] in SET_ORDER else len(SET_ORDER), item[0])
 
 
-def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding: ObjectBinding, chart: Any,
+def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding: ir.WorldObject, chart: Any,
                        err: Any) -> None:
     """`state:`, `variables:` and `events:` of a set-up entry name things of its chart; fields the
     chart decides alone keep their defaults."""
@@ -1326,8 +962,8 @@ def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding
         elif any(states[a].kind.value == "parallel" for a in chart.ancestors(sid)) or states[sid].kind.value == "parallel":
             err((*parts, "state"), f"chart {chart.id} has parallel regions: it cannot be started in {sid!r}; "
                                    "use `events:` (or the fields) instead")
-        chosen = {n for when, _st, assigns in binding.setup_rules
-                  for n in (*when.names, *(m for _name, e in assigns for m in e.names))}
+        chosen = {n for r in binding.setup.rules
+                  for n in (*r.when.names, *(m for _name, e in r.variables for m in e.names))}
         flags = sorted(chosen & set(entry))
         if flags:
             err((*parts, "state"), f"give either `state:` or the field(s) {', '.join(flags)}, which choose the state")
@@ -1341,9 +977,9 @@ def _check_chart_setup(parts: tuple[Any, ...], entry: Mapping[str, Any], binding
     for j, ev in enumerate(entry.get("events", [])):
         if ev not in events:
             err((*parts, "events", j), f"chart {chart.id} has no event {ev!r}; events: {', '.join(sorted(events))}")
-    used = {n for _name, e in binding.setup_variables for n in e.names} | set(binding.then_set)
-    for when, _st, assigns in binding.setup_rules:
-        used |= set(when.names) | {n for _name, e in assigns for n in e.names}
+    used = {n for _name, e in binding.setup.variables for n in e.names} | set(binding.setup.then_set)
+    for r in binding.setup.rules:
+        used |= set(r.when.names) | {n for _name, e in r.variables for n in e.names}
     defaults = HANDLER_DEFAULTS if binding.kind == "handler" else AXIS_DEFAULTS
     for fb in binding.facts:
         if fb.name in entry and fb.name not in used and fb.variable is None and entry[fb.name] != defaults.get(fb.name):
@@ -1371,7 +1007,7 @@ def _oversized_integers(name: str, tree: Any) -> list[Diagnostic]:
 def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario:
     """Check an AOI scenario (already parsed) against its schema and the AOI spec."""
     name = str(path)
-    errors: list[Diagnostic] = list(schema_diagnostics(name, tree, SCENARIO_SCHEMA, "an add-on instruction scenario"))
+    errors: list[Diagnostic] = list(schema_diagnostics(name, tree, _schema("aoi-scenario.schema.json"), "an add-on instruction scenario"))
     errors.extend(_oversized_integers(name, tree))
     if errors:
         raise ScenarioError(errors)
@@ -1403,9 +1039,9 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
             problem = _input_problem(spec, k, v, refs)
             if problem:
                 err(("setup", "aoi", iname, k), f"{k}: {problem}")
-    charts = {c.id: c for c in main_spec(spec.spec_dir).charts}
+    charts = {c.id: c for c in spec.main.charts}
     objects: dict[str, set[str]] = {}
-    bindings: dict[str, ObjectBinding] = {}
+    bindings: dict[str, ir.WorldObject] = {}
     for hname, h in setup["handlers"].items():
         bindings[hname] = b = spec.binding("handler")
         objects[hname] = {"eState", "mode", "OnPath", "registered", "capacity"} | (
@@ -1448,7 +1084,7 @@ def load_aoi_scenario(path: Path | str, tree: Any, spec: AoiSpec) -> AoiScenario
                     err((*p, "set", obj, k), f"{obj}.{k}: {v!r} does not match {json.dumps(props[k], sort_keys=True)}")
                 else:
                     fb = bindings[obj].fact(k)
-                    if fb is not None and fb.variable is None and not fb.sets:
+                    if fb is not None and fb.variable is None and not fb.set:
                         err((*p, "set", obj, k), f"{obj}.{k} is read from chart {bindings[obj].chart} and cannot be set "
                                                  f"(a {bindings[obj].kind} has no event for it)")
         for obj, names in s.get("events", {}).items():
@@ -1497,18 +1133,18 @@ HANDLER_DEFAULTS: dict[str, object] = {
 CHART_SETUP_KEYS = ("state", "variables", "events")
 
 
-def _initial_snap(binding: ObjectBinding, runner: ChartRunner, fields: Mapping[str, object],
+def _initial_snap(binding: ir.WorldObject, runner: ChartRunner, fields: Mapping[str, object],
                   entry: Mapping[str, Any]) -> Snap:
     """The chart's first configuration: the binding's set-up rules, or an explicit `state:`."""
-    variables = {name: e(fields) for name, e in binding.setup_variables}
+    variables = {name: e(fields) for name, e in binding.setup.variables}
     state = None
     if "state" in entry:
         state = str(entry["state"])
     else:
-        for when, st, assigns in binding.setup_rules:
-            if when(fields):
-                state = st
-                variables.update({name: e(fields) for name, e in assigns})
+        for r in binding.setup.rules:
+            if r.when(fields):
+                state = r.state
+                variables.update({name: e(fields) for name, e in r.variables})
                 break
     variables.update(entry.get("variables", {}))
     return runner.initial(state, variables)
@@ -1516,7 +1152,7 @@ def _initial_snap(binding: ObjectBinding, runner: ChartRunner, fields: Mapping[s
 
 def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
     """The world of a set-up (the `setup:` of a scenario): every object on its chart (INT-069)."""
-    charts = {c.id: c for c in main_spec(spec.spec_dir).charts}
+    charts = {c.id: c for c in spec.main.charts}
     scan_ms = int(setup.get("scan_ms", 10))
     handlers = []
     hb = spec.binding("handler")
@@ -1525,7 +1161,7 @@ def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
         fields = {**HANDLER_DEFAULTS, **{k: v for k, v in h.items() if k not in CHART_SETUP_KEYS}}
         obj = Handler(n, hb, hrun, _initial_snap(hb, hrun, fields, h), id=as_int(fields["id"]),
                       phy_axis=str(fields["phy_axis"]), pth_axis=str(fields["pth_axis"]))
-        for name in hb.then_set:
+        for name in hb.setup.then_set:
             obj.set_fact(name, fields[name])
         for e in h.get("events", []):
             obj.fire(e)
@@ -1536,7 +1172,7 @@ def build_world(spec: AoiSpec, setup: Mapping[str, Any]) -> World:
         run = chart_runner(charts[b.chart], scan_ms)
         fields = {**AXIS_DEFAULTS, **{k: v for k, v in a.items() if k not in CHART_SETUP_KEYS}}
         ax = Axis(n, a["type"], b, run, _initial_snap(b, run, fields, a))
-        for name in b.then_set:
+        for name in b.setup.then_set:
             ax.set_fact(name, fields[name])
         for k in ("homed", "homing", "direct_control"):
             if k in ax.plain:

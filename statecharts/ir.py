@@ -37,6 +37,7 @@ class StateKind(enum.Enum):
 
 class ChartKind(enum.Enum):
     AXIS = "axis"
+    HANDLER = "handler"  # a device handler an add-on instruction is given
 
 
 class Stage(enum.Enum):
@@ -162,6 +163,8 @@ class Chart:
     description: str
     provenance: Provenance
     location: Location
+    #: instance parameters (configuration of each instance, given in a set-up)
+    parameters: tuple[ChartParameter, ...] = ()
 
     def state(self, state_id: str) -> State:
         for s in self.states:
@@ -335,6 +338,14 @@ class Spec:
     extended_errors: tuple[ExtendedError, ...]
     interpretations: tuple[Interpretation, ...]
     files: tuple[str, ...] = field(default=())
+    add_ons: tuple[AddOnInstruction, ...] = ()
+
+    def add_on(self, add_on_id: str | None = None) -> AddOnInstruction:
+        """The add-on instruction ``add_on_id`` (the only one when None); KeyError when there is none."""
+        for a in self.add_ons:
+            if add_on_id is None or a.id == add_on_id:
+                return a
+        raise KeyError(add_on_id)
 
     def chart(self, chart_id: str) -> Chart:
         for c in self.charts:
@@ -385,3 +396,211 @@ class Spec:
             if i.id == interp_id:
                 return i
         raise KeyError(interp_id)
+
+
+# --------------------------------------------------------------------------- add-on instructions
+
+
+@dataclass(frozen=True, slots=True)
+class ChartParameter:
+    """An instance parameter of a chart: configuration each instance is given (a handler's id, its axes)."""
+
+    name: str
+    type: str  # "int" | "axis" (the name of an axis of the set-up)
+    default: bool | int | float | str | None
+    description: str
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
+class AddOnParameter:
+    """A parameter of an add-on instruction, in Logix order."""
+
+    name: str
+    usage: str  # "Input" | "Output" | "InOut"
+    type: str  # "axis" | "handle" | "BOOL" | "DINT" | "REAL"
+    data_type: str | None
+    alias: str | None  # the short name expressions use (phy, pth, handler)
+    default: bool | int | float | str | None
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class StatusMember:
+    """A member of an add-on instruction's own status tag."""
+
+    name: str
+    type: str  # "BOOL" | "DINT"
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class AddOnError:
+    code: int
+    name: str
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class RecoveryCall:
+    """A motion instruction a recovery state issues on an axis parameter (by alias)."""
+
+    instruction: str
+    axis: str
+    master: str | None
+    operands: tuple[tuple[str, Expr], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class RecoveryState:
+    id: str
+    call: RecoveryCall | None
+    error: int | None  # the add-on's code when the call errs (its ERR becomes Sts_EXERR)
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class RecoveryTransition:
+    source: str
+    target: str
+    when: Expr
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class Recovery:
+    """The chart of one execution after the checks pass."""
+
+    initial: str
+    states: tuple[RecoveryState, ...]
+    transitions: tuple[RecoveryTransition, ...]
+    description: str
+    provenance: Provenance
+    location: Location
+
+    def state(self, sid: str) -> RecoveryState:
+        return next(s for s in self.states if s.id == sid)
+
+
+@dataclass(frozen=True, slots=True)
+class OnDone:
+    when: Expr
+    set: str  # "path_verified" | "handler.OnPath"
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class ScanRule:
+    """What a false rung or a prescan does to an add-on instance."""
+
+    clear: tuple[str, ...]
+    abort_call: str | None
+    forget: tuple[str, ...]
+    description: str
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class FactSet:
+    value: bool | int | float | str
+    fire: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Fact:
+    """One fact of a world object, read from its chart (``when`` or ``variable``), and how it is set."""
+
+    name: str
+    when: Expr | None
+    variable: str | None
+    set: tuple[FactSet, ...]
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class SetupRule:
+    when: Expr
+    state: str | None
+    variables: tuple[tuple[str, Expr], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class WorldSetup:
+    variables: tuple[tuple[str, Expr], ...]
+    rules: tuple[SetupRule, ...]
+    then_set: tuple[str, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class WorldObject:
+    """How the objects of one kind (an axis data type, or the handler) are read from their chart."""
+
+    kind: str
+    chart: str
+    facts: tuple[Fact, ...]
+    on_scan: tuple[str, ...]
+    stop: tuple[str, ...]
+    register: tuple[str, ...]
+    setup: WorldSetup
+    provenance: Provenance
+    location: Location
+
+    def fact(self, name: str) -> Fact | None:
+        return next((f for f in self.facts if f.name == name), None)
+
+
+@dataclass(frozen=True, slots=True)
+class World:
+    objects: tuple[WorldObject, ...]
+    provenance: Provenance
+    location: Location
+
+    def object(self, kind: str) -> WorldObject:
+        return next(o for o in self.objects if o.kind == kind)
+
+
+@dataclass(frozen=True, slots=True)
+class Execution:
+    mode: str  # "level"
+    provenance: Provenance
+    location: Location
+
+
+@dataclass(frozen=True, slots=True)
+class AddOnInstruction:
+    """An add-on instruction: a routine with parameters, its own status tag, ordered checks and a recovery chart."""
+
+    id: str
+    name: str
+    execution: Execution
+    parameters: tuple[AddOnParameter, ...]
+    status: tuple[StatusMember, ...]
+    local_tags: tuple[Variable, ...]
+    errors: tuple[AddOnError, ...]
+    checks: tuple[Check, ...]
+    recovery: Recovery
+    on_done: tuple[OnDone, ...]
+    rung_false: ScanRule
+    prescan: ScanRule
+    world: World
+    description: str
+    provenance: Provenance
+    location: Location
+
+    def parameter(self, name: str) -> AddOnParameter:
+        return next(p for p in self.parameters if p.name == name or p.alias == name)
+
+    def error(self, code: int) -> AddOnError:
+        return next(e for e in self.errors if e.code == code)

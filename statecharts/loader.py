@@ -81,12 +81,14 @@ OVERLAP_ENUMERATION_LIMIT = 20_000
 
 _PROVENANCE = frozenset({"source", "interpretation"})
 FILE_KEYS = frozenset(
-    {"format", "chart", "instruction", "tag_type", "execution_tables", "interpretations", "errors", "extended_errors"}
+    {"format", "chart", "instruction", "add_on_instruction", "tag_type", "execution_tables", "interpretations", "errors",
+     "extended_errors"}
 )
 CHART_KEYS = frozenset(
     {"id", "name", "kind", "state_attribute", "axis_types", "description", "variables", "events", "states",
-     "initial", "transitions"}
+     "initial", "transitions", "parameters"}
 ) | _PROVENANCE
+CHART_PARAMETER_KEYS = frozenset({"name", "type", "default", "description"}) | _PROVENANCE
 STATE_KEYS = frozenset(
     {"id", "name", "kind", "value", "initial", "history", "description", "entry", "exit", "states", "implies"}
 ) | _PROVENANCE
@@ -118,6 +120,27 @@ ERROR_KEYS = frozenset({"code", "name", "meaning", "confidence"}) | _PROVENANCE
 EXTENDED_ERROR_KEYS = frozenset(
     {"instruction", "err", "exerr", "name", "meaning", "confidence"}
 ) | _PROVENANCE
+# the add-on instruction (statecharts/addon_loader.py builds it)
+ADD_ON_INSTRUCTION_KEYS = frozenset(
+    {"id", "name", "description", "execution", "parameters", "status", "local_tags", "errors", "checks", "recovery",
+     "on_done", "rung_false", "prescan", "world"}
+) | _PROVENANCE
+EXECUTION_KEYS = frozenset({"mode"}) | _PROVENANCE
+ADDON_PARAMETER_KEYS = frozenset({"name", "usage", "type", "data_type", "alias", "default", "description"}) | _PROVENANCE
+STATUS_MEMBER_KEYS = frozenset({"name", "type", "description"}) | _PROVENANCE
+ADDON_ERROR_KEYS = frozenset({"code", "name", "description"}) | _PROVENANCE
+RECOVERY_KEYS = frozenset({"initial", "states", "transitions", "description"}) | _PROVENANCE
+RECOVERY_STATE_KEYS = frozenset({"id", "description", "call", "error"}) | _PROVENANCE
+RECOVERY_CALL_KEYS = frozenset({"instruction", "axis", "master", "operands"})
+RECOVERY_TRANSITION_KEYS = frozenset({"from", "to", "when"}) | _PROVENANCE
+ON_DONE_KEYS = frozenset({"when", "set"}) | _PROVENANCE
+SCAN_RULE_KEYS = frozenset({"clear", "abort_call", "forget"}) | _PROVENANCE
+WORLD_KEYS = frozenset({"objects"}) | _PROVENANCE
+WORLD_OBJECT_KEYS = frozenset({"kind", "chart", "on_scan", "stop", "register", "setup", "facts"}) | _PROVENANCE
+WORLD_SETUP_KEYS = frozenset({"variables", "rules", "then_set"})
+SETUP_RULE_KEYS = frozenset({"when", "state", "variables"})
+FACT_KEYS = frozenset({"name", "when", "variable", "set"}) | _PROVENANCE
+FACT_SET_KEYS = frozenset({"value", "fire"})
 
 #: Every node kind and its keys (``tag_type.internal`` items are variables).
 NODE_KEYS: dict[str, frozenset[str]] = {
@@ -143,6 +166,24 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "interpretation": INTERPRETATION_KEYS,
     "error": ERROR_KEYS,
     "extended_error": EXTENDED_ERROR_KEYS,
+    "chart_parameter": CHART_PARAMETER_KEYS,
+    "add_on_instruction": ADD_ON_INSTRUCTION_KEYS,
+    "execution": EXECUTION_KEYS,
+    "addon_parameter": ADDON_PARAMETER_KEYS,
+    "status_member": STATUS_MEMBER_KEYS,
+    "addon_error": ADDON_ERROR_KEYS,
+    "recovery": RECOVERY_KEYS,
+    "recovery_state": RECOVERY_STATE_KEYS,
+    "recovery_call": RECOVERY_CALL_KEYS,
+    "recovery_transition": RECOVERY_TRANSITION_KEYS,
+    "on_done": ON_DONE_KEYS,
+    "scan_rule": SCAN_RULE_KEYS,
+    "world": WORLD_KEYS,
+    "world_object": WORLD_OBJECT_KEYS,
+    "world_setup": WORLD_SETUP_KEYS,
+    "setup_rule": SETUP_RULE_KEYS,
+    "fact": FACT_KEYS,
+    "fact_set": FACT_SET_KEYS,
 }
 
 
@@ -1058,6 +1099,7 @@ class _Builder:
             axis_types=tuple(c["axis_types"]), variables=variables, events=tuple(events),
             states=tuple(states), transitions=tuple(transitions), root_initial=root_initial,
             description=str(c.get("description", "")), provenance=self.prov(f, base, c), location=self.loc(f, base),
+            parameters=self.chart_parameters(f, c),
         )
         if any(d.file == f.name for d in self.errors):
             return chart
@@ -1066,6 +1108,19 @@ class _Builder:
         self._eventless_cycles(f, chart)
         self._assignment_kinds(f, chart, state_nodes, [(i, e.actions) for i, e in enumerate(events)])
         return chart
+
+    def chart_parameters(self, f: _File, c: Node) -> tuple[ir.ChartParameter, ...]:
+        nodes = c.items("parameters", "chart_parameter")
+        self.duplicates(f, ("chart", "parameters"), nodes, "name", "parameter")
+        variables = {str(v["name"]) for v in c.items("variables", "variable")}
+        out = []
+        for i, n in enumerate(nodes):
+            p = ("chart", "parameters", i)
+            if n["name"] in variables:
+                self.error(f, (*p, "name"), f"parameter {n['name']!r} is also a variable of the chart")
+            out.append(ir.ChartParameter(n["name"], n["type"], n.get("default"), str(n.get("description", "")),
+                                         self.prov(f, p, n)))
+        return tuple(out)
 
     def _assignment_kinds(
         self, f: _File, chart: ir.Chart, state_nodes: dict[str, tuple[Any, ...]],
@@ -1565,6 +1620,17 @@ def _build_spec(
                         f"{new.mnemonic} already has variant {other.id!r} for chart(s) {', '.join(sorted(shared))}; "
                         "each chart needs exactly one variant of an instruction"))
 
+    add_ons: dict[str, ir.AddOnInstruction] = {}
+    for f in files:
+        if "add_on_instruction" in f.top:
+            from statecharts.addon_loader import build_add_on
+            node = f.top.child("add_on_instruction", "add_on_instruction")
+            if node["id"] in add_ons or node["id"] in {i.mnemonic for i in instructions.values()}:
+                b.error(f, ("add_on_instruction", "id"), f"duplicate instruction {node['id']!r}")
+                continue
+            if complete:
+                add_ons[node["id"]] = build_add_on(b, f, node, charts)
+
     # cross-file references: error codes and interpretations
     codes = {e.code for e in errors}
     ext_pairs = {(x.instruction, x.err, x.exerr) for x in extended}
@@ -1612,4 +1678,5 @@ def _build_spec(
         extended_errors=tuple(sorted(extended, key=lambda x: (x.instruction, x.err, x.exerr))),
         interpretations=tuple(sorted(interpretations, key=lambda i: i.id)),
         files=tuple(f.name for f in files),
+        add_ons=tuple(add_ons[k] for k in sorted(add_ons)),
     )

@@ -197,7 +197,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
         # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
         from statecharts import aoi
-        return aoi.load_aoi_scenario(path, tree, aoi.bundled_aoi())  # type: ignore[return-value]  # run_scenario hands it to the AOI runner
+        return aoi.load_aoi_scenario(path, tree, aoi.for_spec(spec))  # type: ignore[return-value]  # run_scenario hands it to the AOI runner
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
@@ -522,7 +522,7 @@ def run_scenario(
     if isinstance(scenario, ProgramScenario):
         return run_program_scenario(scenario, spec, on_row=on_row, keep_rows=keep_rows)
     if isinstance(scenario, aoi.AoiScenario):
-        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.bundled_aoi())
+        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.for_spec(spec))
         if on_row is not None:
             for row in result.rows:
                 on_row(row)

@@ -1,5 +1,13 @@
-"""The conformance suite the tests share: every hand-written scenario, a small system and
-the vectors-only CIP system of conformance/systems/, built once per test process."""
+"""The conformance suites the tests share, each generated once per content.
+
+* :func:`suite_dir`: the bundled suite, exactly what ``motionchart vectors`` writes (every
+  hand-written scenario and the generated vectors of the systems of
+  ``conformance/systems/suite.yaml``).  It is built once into the temporary directory,
+  under a name derived from the spec, the scenarios and the code, so that the test
+  workers of one run and later runs on the same content share it.
+* :func:`small_suite_dir`: the generated vectors of one small servo-axis system only,
+  quick to build again (the byte-identity test builds it twice).
+"""
 
 from __future__ import annotations
 
@@ -8,15 +16,16 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from conformance.vectors import SYSTEMS_DIR, build_suite, write_suite
-from statecharts.loader import load_spec
+from conformance.vectors import build_suite, cached_suite
+from statecharts.loader import bundled_spec_dir, load_spec
 
 ROOT = Path(__file__).resolve().parent.parent
+CACHE = Path(tempfile.gettempdir()) / "motionchart-test-vectors"
 SMALL_SYSTEM = """\
 format: motionchart-system/1
 name: small
 description: one servo axis with five state instructions
-source: "tests"
+source: "MC tests/conformance_helpers.py"
 scan_ms: 10
 coarse_update_ms: 20
 axes:
@@ -33,15 +42,25 @@ abstraction:
 """
 
 
-def build(tmp: Path) -> Any:
+def small_system(tmp: Path) -> Path:
     system = tmp / "small.yaml"
     system.write_text(SMALL_SYSTEM, encoding="utf-8")
-    return build_suite(load_spec(), scenarios=[ROOT / "scenarios"],
-                       systems=[str(system), str(SYSTEMS_DIR / "cip_unassigned.yaml")])
+    return system
+
+
+def build_small(tmp: Path) -> Any:
+    return build_suite(load_spec(), scenarios=[], systems=[str(small_system(tmp))])
 
 
 @functools.lru_cache(maxsize=1)
 def suite_dir() -> Path:
-    tmp = Path(tempfile.mkdtemp(prefix="motionchart-suite-"))
-    write_suite(build(tmp), tmp / "vectors")
+    roots = [bundled_spec_dir(), ROOT / "scenarios"]
+    return cached_suite(CACHE, roots, lambda: build_suite(load_spec(), scenarios=[ROOT / "scenarios"]))
+
+
+@functools.lru_cache(maxsize=1)
+def small_suite_dir() -> Path:
+    tmp = Path(tempfile.mkdtemp(prefix="motionchart-small-suite-"))
+    from conformance.vectors import write_suite
+    write_suite(build_small(tmp), tmp / "vectors")
     return tmp / "vectors"

@@ -30,7 +30,7 @@ from statecharts.loader import load_spec, read_yaml
 
 PROJECT = Path(__file__).resolve().parents[1]
 SPEC = aoi.load_aoi()
-MAIN = aoi.main_spec()
+MAIN = aoi.bundled_aoi().main
 
 #: 003 §4, typed in by hand: handler 1 with two methods registered, physical at 100, path at 120.
 SETUP: dict[str, Any] = {
@@ -410,10 +410,8 @@ def test_world_section_errors_are_located(tmp_path: Path) -> None:
 
     from statecharts.diagnostics import SpecError
     root = tmp_path / "spec"
-    shutil.copytree(PROJECT / "spec" / "aoi", root / "aoi")
-    shutil.copytree(PROJECT / "spec" / "instructions" / "motion", root / "instructions" / "motion")
-    shutil.copy(PROJECT / "spec" / "interpretations.yaml", root / "interpretations.yaml")
-    f = root / "aoi" / "sync_pth_phy_ax.yaml"
+    shutil.copytree(PROJECT / "spec", root, ignore=shutil.ignore_patterns("__pycache__", "*.py", "schema"))
+    f = root / "addons" / "raM_Opr_SyncPthPhyAx_CD.yaml"
     text = f.read_text(encoding="utf-8")
     for old, new in [("fire: [axis_fault]}, {value: false, fire: [fault_reset]}], source: \"SYNC-RM §2.4 1010",
                       "fire: [axis_faults]}, {value: false, fire: [fault_reset]}], source: \"SYNC-RM §2.4 1010"),
@@ -430,4 +428,4 @@ def test_world_section_errors_are_located(tmp_path: Path) -> None:
     for needle in ("no event 'axis_faults'", "no variable 'DirectControl'", "unknown chart 'AxisVirtually'",
                    "activ", "no state 'Runing'"):
         assert needle in msg, (needle, msg)
-    assert "sync_pth_phy_ax.yaml:" in msg
+    assert "raM_Opr_SyncPthPhyAx_CD.yaml:" in msg

@@ -74,7 +74,7 @@ def test_bundled_aoi_system_produces_every_documented_code(bundled_report: dict[
 def _mutated_spec(tmp_path: Path, old: str, new: str) -> Path:
     spec_dir = tmp_path / "spec"
     shutil.copytree(bundled_spec_dir(), spec_dir, ignore=shutil.ignore_patterns("__pycache__"))
-    f = spec_dir / "aoi" / "sync_pth_phy_ax.yaml"
+    f = spec_dir / "addons" / "raM_Opr_SyncPthPhyAx_CD.yaml"
     text = f.read_text(encoding="utf-8")
     assert old in text
     f.write_text(text.replace(old, new, 1), encoding="utf-8")
@@ -104,9 +104,9 @@ def test_a_false_rung_that_keeps_sts_ip_is_found_and_replays(tmp_path: Path, cap
 
 
 def test_an_undocumented_code_is_found(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    spec_dir = _mutated_spec(tmp_path, "{id: speed, code: 1017,", "{id: speed, code: 1019,")
+    spec_dir = _mutated_spec(tmp_path, "{id: speed, err: 1017,", "{id: speed, err: 1019,")
     # the error list must know the code for the spec to load
-    f = spec_dir / "aoi" / "sync_pth_phy_ax.yaml"
+    f = spec_dir / "addons" / "raM_Opr_SyncPthPhyAx_CD.yaml"
     f.write_text(f.read_text(encoding="utf-8").replace(
         "    - {code: 1017, name: Negative speed,", "    - {code: 1019, name: Negative speed,", 1), encoding="utf-8")
     code, out, err = _check(["--system", "aoi", "--spec", str(spec_dir), "--json", "-q"], capsys)

@@ -69,7 +69,7 @@ def _offered(model: Model, snapshot: tuple[object, ...]) -> list[int]:
     return [c.index for c in model.enabled()]
 
 
-@pytest.mark.parametrize("name", ["noncip", "noncip_pairs", "two_axes"])
+@pytest.mark.parametrize("name", ["cip", "noncip", "noncip_pairs", "two_axes"])
 @given(data=st.data())
 def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
     model = models[name]

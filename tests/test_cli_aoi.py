@@ -1,6 +1,6 @@
-"""``motionchart validate`` loads the add-on instruction (``spec/aoi/``) and its sub-instructions.
+"""``motionchart validate`` loads the whole spec, the add-on instruction (``spec/addons/``) included.
 
-What is checked: the extra summary line and its counts (17 ordered checks and 21 codes
+What is checked: the one summary line and the add-on instruction's counts in it (17 ordered checks and 21 codes
 are typed in from 003 §1.3.2 / §2.4 and docs/aoi.md, not read from the spec); the
 ``--json`` record; and that a broken add-on instruction or sub-instruction file in a
 copy of the spec gives located ``file:line:col: path: message`` lines on standard
@@ -27,6 +27,7 @@ from statecharts.loader import bundled_spec_dir
 
 DIAGNOSTIC = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<rest>.*)$")
 AOI_ID = "raM_Opr_SyncPthPhyAx_CD"
+ROOT = Path(__file__).resolve().parents[1]
 #: 003 §1.3.2 has 17 rows with a code once 1017 is placed (docs/aoi.md); §2.4 lists 21 codes.
 DOCUMENTED_CHECKS = 17
 DOCUMENTED_CODES = 21
@@ -59,7 +60,7 @@ def spec_copy(tmp_path: Path) -> Path:
 
 
 def aoi_file(spec_dir: Path) -> Path:
-    (path,) = sorted((spec_dir / "aoi").glob("*.yaml"))
+    (path,) = sorted((spec_dir / "addons").glob("*.yaml"))
     return path
 
 
@@ -85,29 +86,30 @@ def assert_located(rc: int, out: str, err: str, file: Path, line: int, *words: s
 # --------------------------------------------------------------------------- the summary
 
 
-def test_validate_prints_the_add_on_instruction_line(capsys: pytest.CaptureFixture[str]) -> None:
+def test_validate_prints_one_summary_with_the_add_on_instruction(capsys: pytest.CaptureFixture[str]) -> None:
     rc, out, err = run(capsys, "validate")
     assert (rc, err) == (0, "")
-    first, second = out.splitlines()
-    assert first.startswith("spec OK: ")
+    (line,) = out.splitlines()
+    assert line.startswith("spec OK: ")
     aoi = bundled_aoi()
-    assert (len(aoi.checks), len(aoi.errors), len(aoi.instructions)) == (
+    assert (len(aoi.add_on.checks), len(aoi.errors), len(aoi.instructions)) == (
         DOCUMENTED_CHECKS, DOCUMENTED_CODES, DOCUMENTED_SUBS)
-    assert second == (f"add-on instructions: 1 ({DOCUMENTED_CHECKS} checks, {DOCUMENTED_CODES} codes, "
-                      f"{len(aoi.states)} recovery states, {len(aoi.transitions)} transitions), "
-                      f"{DOCUMENTED_SUBS} sub-instructions")
+    rec = aoi.add_on.recovery
+    assert line.endswith(f", add-on instruction {AOI_ID} ({DOCUMENTED_CHECKS} checks, {DOCUMENTED_CODES} codes, "
+                         f"{len(rec.states)} recovery states, {len(rec.transitions)} transitions; "
+                         "calls MAG, MAH, MAM, MAS, MRP)")
 
 
 def test_validate_directory_loads_its_own_add_on_instruction(capsys: pytest.CaptureFixture[str],
                                                              spec_copy: Path) -> None:
     # one check fewer in the copy: the count printed is the copy's, not the bundled one's
-    edit(aoi_file(spec_copy), "    - {id: speed, code: 1017,", "    - {id: speed_gone, code: 1017,")
+    edit(aoi_file(spec_copy), "    - {id: speed, err: 1017,", "    - {id: speed_gone, err: 1017,")
     text = aoi_file(spec_copy).read_text(encoding="utf-8")
     kept = [line for line in text.splitlines() if "{id: speed_gone," not in line]
     aoi_file(spec_copy).write_text("\n".join(kept) + "\n", encoding="utf-8")
     rc, out, err = run(capsys, "validate", str(spec_copy))
     assert (rc, err) == (0, "")
-    assert f"add-on instructions: 1 ({DOCUMENTED_CHECKS - 1} checks, {DOCUMENTED_CODES} codes" in out
+    assert f"add-on instruction {AOI_ID} ({DOCUMENTED_CHECKS - 1} checks, {DOCUMENTED_CODES} codes" in out
 
 
 def test_validate_json_lists_the_add_on_instruction(capsys: pytest.CaptureFixture[str]) -> None:
@@ -115,13 +117,13 @@ def test_validate_json_lists_the_add_on_instruction(capsys: pytest.CaptureFixtur
     assert rc == 0
     doc = json.loads(out)
     (aoi,) = doc["add_on_instructions"]
-    assert aoi["id"] == AOI_ID and aoi["file"] == "spec/aoi/sync_pth_phy_ax.yaml"
+    assert aoi["id"] == AOI_ID and aoi["file"] == "spec/addons/raM_Opr_SyncPthPhyAx_CD.yaml"
     assert (aoi["checks"], aoi["error_codes"]) == (DOCUMENTED_CHECKS, DOCUMENTED_CODES)
-    assert sorted(aoi["sub_instructions"]) == ["MAG", "MAH", "MAM", "MAS", "MRP"]
+    assert aoi["calls"] == ["MAG", "MAH", "MAM", "MAS", "MRP"]
 
 
 def test_a_spec_file_alone_has_no_add_on_instruction(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    # a file (not a directory) names no aoi/ folder: only the main loader speaks
+    # a file (not a directory) names no addons/ folder: only the main loader speaks
     f = tmp_path / "one.yaml"
     f.write_text("format: motionchart-spec/1\n", encoding="utf-8")
     rc, out, err = run(capsys, "validate", str(f))
@@ -132,27 +134,28 @@ def test_a_spec_file_alone_has_no_add_on_instruction(capsys: pytest.CaptureFixtu
 
 
 def test_malformed_aoi_yaml_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
-    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level: zz_mark\n")
+    path = edit(aoi_file(spec_copy), "  execution: {mode: level,", "  execution: {mode: level: zz_mark,")
     rc, out, err = run(capsys, "validate", str(spec_copy))
     assert_located(rc, out, err, path, line_of(path, "zz_mark"), "YAML syntax error")
-    assert len(diagnostics(err)) == 1  # the main loader reads the file too: one report, not two
+    assert len(diagnostics(err)) == 1  # one loader: one report
 
 
 @pytest.mark.parametrize(("old", "new", "marker", "words"), [
-    ("  execution: level\n", "  execution: level\n  zz_unknown: 1\n", "zz_unknown", ("aoi.zz_unknown", "unknown key")),
-    ('fails: "handler.eState != 7"', 'fails: "handler.eState !=== 7"', "!===",
-     ("aoi.checks[1].fails", "bad expression")),
-    ('fails: "handler.eState != 7"', 'fails: "hndlr_zz.eState != 7"', "hndlr_zz",
-     ("aoi.checks[1].fails", "unknown name")),
-    ("{id: handler_running, code: 1001,", "{id: handler_running, code: 9901,", "9901",
-     ("aoi.checks[1].code", "9901")),
+    ("  execution: {mode: level,", "  zz_unknown: 1\n  execution: {mode: level,", "zz_unknown",
+     ("add_on_instruction", "zz_unknown")),
+    ('fails_when: "handler.eState != 7"', 'fails_when: "handler.eState !=== 7"', "!===",
+     ("add_on_instruction.checks[1].fails_when", "!==")),
+    ('fails_when: "handler.eState != 7"', 'fails_when: "hndlr_zz.eState != 7"', "hndlr_zz",
+     ("add_on_instruction.checks[1].fails_when", "unknown variable")),
+    ("{id: handler_running, err: 1001,", "{id: handler_running, err: 9901,", "9901",
+     ("add_on_instruction.checks[1].err", "9901")),
     ("{from: homing, to: moving,", "{from: homing_zz, to: moving,", "homing_zz",
-     ("aoi.recovery.transitions[4].from", "unknown state")),
+     ("add_on_instruction.recovery.transitions[4].from", "unknown state")),
     ("call: {instruction: MAH, axis: phy}", "call: {instruction: MZZ, axis: phy}", "MZZ",
-     ("aoi.recovery.states[4].call", "unknown sub-instruction")),
-    # the loader lets a repeated check id through; anchors and diagram nodes cannot take it
-    ("{id: handler_running, code: 1001,", "{id: registered, code: 1001,", "{id: registered, code: 1001,",
-     ("aoi.checks[1]", "duplicate check id 'registered'")),
+     ("add_on_instruction.recovery.states[4].call.instruction", "unknown sub-instruction")),
+    # a repeated check id is refused by the loader itself (anchors and diagram nodes need it unique)
+    ("{id: handler_running, err: 1001,", "{id: registered, err: 1001,", "{id: registered, err: 1001,",
+     ("add_on_instruction.checks[1].id", "duplicate check 'registered'")),
 ])
 def test_bad_aoi_content_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path, old: str,
                                             new: str, marker: str, words: tuple[str, ...]) -> None:
@@ -162,13 +165,13 @@ def test_bad_aoi_content_is_a_located_error(capsys: pytest.CaptureFixture[str], 
 
 
 def test_bad_aoi_json_output(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
-    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown: 1\n")
+    path = edit(aoi_file(spec_copy), "  execution: {mode: level,", "  zz_unknown: 1\n  execution: {mode: level,")
     rc, out, _ = run(capsys, "validate", "--json", str(spec_copy))
     assert rc == 1
     doc = json.loads(out)
     assert doc["valid"] is False
     (d,) = doc["diagnostics"]
-    assert (d["file"], d["line"], d["path"]) == (str(path), line_of(path, "zz_unknown"), "aoi.zz_unknown")
+    assert (d["file"], d["line"]) == (str(path), line_of(path, "zz_unknown"))
 
 
 def test_empty_aoi_file_is_reported(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
@@ -178,12 +181,14 @@ def test_empty_aoi_file_is_reported(capsys: pytest.CaptureFixture[str], spec_cop
     assert_located(rc, out, err, path, 1, "empty")
 
 
-def test_missing_aoi_file_is_reported_against_the_given_directory(capsys: pytest.CaptureFixture[str],
-                                                                  spec_copy: Path) -> None:
-    aoi_file(spec_copy).rename(spec_copy / "aoi" / "moved.txt")
+def test_a_spec_without_the_add_on_instruction_is_refused_by_commands_that_need_it(
+        capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
+    aoi_file(spec_copy).rename(spec_copy / "addons" / "moved.txt")
     rc, out, err = run(capsys, "validate", str(spec_copy))
-    assert rc == 1 and out == "" and "Traceback" not in err
-    assert f"{spec_copy / 'aoi'}:1:1: expected one add-on instruction file, found 0" in err
+    # what only the add-on instruction cited is now cited by nothing: a located error
+    assert rc == 1 and out == "" and "interpretation INT-023 is not used by any spec element" in err
+    rc, out, err = run(capsys, "diagram", AOI_ID, "--spec", str(spec_copy))
+    assert rc != 0 and out == "" and "Traceback" not in err
     assert str(bundled_spec_dir()) not in err
 
 
@@ -195,7 +200,7 @@ def test_bad_sub_instruction_is_a_located_error(capsys: pytest.CaptureFixture[st
 
 def test_aoi_and_main_spec_errors_are_reported_together(capsys: pytest.CaptureFixture[str],
                                                         spec_copy: Path) -> None:
-    aoi = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown: 1\n")
+    aoi = edit(aoi_file(spec_copy), "  execution: {mode: level,", "  zz_unknown: 1\n  execution: {mode: level,")
     main_file = sorted((spec_copy / "instructions").glob("*.yaml"))[0]
     edit(main_file, "\ninstruction:\n", "\ninstruction:\n  zz_bogus: 1\n")
     rc, out, err = run(capsys, "validate", str(spec_copy))
@@ -207,16 +212,16 @@ def test_aoi_and_main_spec_errors_are_reported_together(capsys: pytest.CaptureFi
 
 def test_generate_and_diagram_report_a_broken_aoi(capsys: pytest.CaptureFixture[str], spec_copy: Path,
                                                   tmp_path: Path) -> None:
-    path = edit(aoi_file(spec_copy), 'fails: "handler.eState != 7"', 'fails: "hndlr_zz.eState != 7"')
+    path = edit(aoi_file(spec_copy), 'fails_when: "handler.eState != 7"', 'fails_when: "hndlr_zz.eState != 7"')
     line = line_of(path, "hndlr_zz")
     rc, out, err = run(capsys, "generate", "-o", str(tmp_path / "gen"), "--spec", str(spec_copy),
                        "--scenarios", str(tmp_path))
     assert rc == 1 and "Traceback" not in err and f"{path}:{line}:" in err
     rc, out, err = run(capsys, "diagram", AOI_ID, "--spec", str(spec_copy))
     assert rc == 1 and out == "" and f"{path}:{line}:" in err
-    # a chart of the main spec does not need the add-on instruction
+    # the add-on instruction is part of the spec: a spec validate rejects, every command rejects
     rc, out, err = run(capsys, "diagram", "AxisNonCIP", "--spec", str(spec_copy))
-    assert rc == 0 and out.startswith("digraph")
+    assert rc == 1 and out == "" and f"{path}:{line}:" in err
 
 
 def _env(**extra: str) -> dict[str, str]:
@@ -227,10 +232,25 @@ def _env(**extra: str) -> dict[str, str]:
 
 @pytest.mark.skipif(not MOTIONCHART.exists(), reason="console script not installed next to this python")
 def test_console_script_reports_a_broken_aoi_without_traceback(spec_copy: Path, tmp_path: Path) -> None:
-    path = edit(aoi_file(spec_copy), "  execution: level\n", "  execution: level\n  zz_unknown§: 1\n")
+    path = edit(aoi_file(spec_copy), "  execution: {mode: level,", "  zz_unknown§: 1\n  execution: {mode: level,")
     proc = subprocess.run([str(MOTIONCHART), "validate", str(spec_copy)], capture_output=True, text=True,
                           env=_env(PYTHONIOENCODING="ascii"), timeout=120, cwd=tmp_path)
     assert proc.returncode == 1 and proc.stdout == ""
     assert "Traceback" not in proc.stderr
     assert proc.stderr.startswith(f"{path}:{line_of(path, 'zz_unknown')}:")
     assert proc.stderr.rstrip().endswith("1 error(s)")
+
+
+def test_simulate_runs_the_add_on_instruction_of_the_spec_copy(capsys: pytest.CaptureFixture[str],
+                                                               spec_copy: Path) -> None:
+    scenario = ROOT / "scenarios" / "aoi" / "err_1017_negative_speed.yaml"
+    rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
+    assert rc == 0, (out, err)
+    # the copy reports another code for a negative speed: the scenario that expects 1017 now fails
+    edit(aoi_file(spec_copy), "{id: speed, err: 1017,", "{id: speed, err: 1013,")
+    rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
+    assert rc == 1 and "Sts_ERR expected 1017, got 1013" in out + err, (out, err)
+    # a copy the loader refuses is refused here too, with its place
+    path = edit(aoi_file(spec_copy), 'fails_when: "handler.eState != 7"', 'fails_when: "hndlr_zz.eState != 7"')
+    rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
+    assert rc == 1 and f"{path}:{line_of(path, 'hndlr_zz')}:" in err and "Traceback" not in err

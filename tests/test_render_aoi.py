@@ -94,9 +94,11 @@ def run(argv: list[str]) -> tuple[int, str, str]:
 
 def test_spec_check_order_is_the_documented_order() -> None:
     aoi = bundled_aoi()
-    assert [c.code for c in aoi.checks] == CHECK_ORDER
-    assert {c.code for c in aoi.checks if c.applies == 1} == SYNC1_ONLY
-    assert all(c.applies is None for c in aoi.checks if c.code not in SYNC1_ONLY)
+    checks = aoi.add_on.checks
+    assert [c.err for c in checks] == CHECK_ORDER
+    # a check restricted to SyncType 1 says so first: "Cfg_SyncType == 1 and (...)"
+    assert {c.err for c in checks if c.fails_when.text.startswith("Cfg_SyncType == 1 and (")} == SYNC1_ONLY
+    assert all("Cfg_SyncType" not in c.fails_when.text for c in checks if c.err not in SYNC1_ONLY)
     assert sorted(code for code, _ in aoi.errors) == ALL_CODES
 
 
@@ -107,15 +109,15 @@ def test_check_table_lists_the_codes_in_spec_and_documented_order(doc: AoiDocume
     rows = table_rows(section(page, "Checks, in the order they run"))
     assert [r[0] for r in rows] == [str(n) for n in range(1, len(CHECK_ORDER) + 1)]
     codes = [int(re.match(r"\[(\d+)\]", r[2]).group(1)) for r in rows]
-    assert codes == [c.code for c in bundled_aoi().checks]
+    assert codes == [c.err for c in bundled_aoi().add_on.checks]
     assert codes == CHECK_ORDER
     for r, code in zip(rows, codes):
-        assert (r[3] == "`Cfg_SyncType = 1`") == (code in SYNC1_ONLY), r
-        assert r[6] and r[6] != "—"  # the source
-        assert "sync_pth_phy_ax.yaml:" in r[8]  # defined at
+        assert r[3].startswith("`Cfg_SyncType == 1 and (") == (code in SYNC1_ONLY), r
+        assert r[5] and r[5] != "—"  # the source
+        assert "raM_Opr_SyncPthPhyAx_CD.yaml:" in r[7]  # defined at
     # the interpretation links the documents name
     by_code = dict(zip(codes, rows))
-    assert "INT-022" in by_code[1118][7] and "INT-026" in by_code[1017][7] and "INT-026" in by_code[1002][7]
+    assert "INT-022" in by_code[1118][6] and "INT-026" in by_code[1017][6] and "INT-026" in by_code[1002][6]
 
 
 def test_every_error_code_appears_in_the_page(doc: AoiDocument, page: str) -> None:
@@ -181,7 +183,7 @@ def test_flowchart_has_one_decision_per_check_in_order(doc: AoiDocument) -> None
         assert node.title[0].startswith(f"{n}. ")
         (yes,) = [e for e in fc.edges if e.source == node.id and e.label == "yes"]
         assert nodes[yes.target].kind == "error" and f"Sts_ERR = {code}" in nodes[yes.target].title
-        assert any("Cfg_SyncType = 1" in line for line in node.title) == (code in SYNC1_ONLY)
+        assert " ".join(node.detail).startswith("Cfg_SyncType == 1 and (") == (code in SYNC1_ONLY)
     # the "no" branches chain the checks top to bottom
     chain = [e.target for e in fc.edges if e.label == "no" and e.source.startswith("check_")]
     assert chain == [n.id for n in checks[1:]] + ["recovery"]
@@ -298,5 +300,5 @@ def test_spec_dirs_follow_the_spec_arguments(tmp_path: Path) -> None:
     shutil.copytree(bundled_spec_dir(), copy, ignore=shutil.ignore_patterns("__pycache__", "*.py", "schema"))
     assert aoi_spec_dirs([copy, copy / "charts"]) == [copy]
     doc = load_aoi_document(copy)
-    assert doc.file == "myspec/aoi/sync_pth_phy_ax.yaml"  # never absolute
+    assert doc.file == "myspec/addons/raM_Opr_SyncPthPhyAx_CD.yaml"  # never absolute
     assert all(s.file.startswith("myspec/instructions/motion/") for s in doc.subs)

@@ -163,7 +163,7 @@ def test_evidence_and_model_checker_files_are_checked_too(spec_copy: Path) -> No
 
 
 def test_add_on_instruction_loader_refuses_too(spec_copy: Path) -> None:
-    path = spec_copy / "aoi" / "sync_pth_phy_ax.yaml"
+    path = spec_copy / "addons" / "raM_Opr_SyncPthPhyAx_CD.yaml"
     text = path.read_text(encoding="utf-8")
     m = re.search(r'source: "(SYNC-RM [^"]+)"', text)
     assert m is not None

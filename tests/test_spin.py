@@ -101,7 +101,7 @@ def test_missing_spin_is_a_clear_error(tmp_path: Path) -> None:
 
 
 @needs_spin
-@pytest.mark.parametrize(("n", "symmetry"), sampled([(3, True), (3, False), (6, True), (9, True), (6, False)],
+@pytest.mark.parametrize(("n", "symmetry"), sampled([(3, True), (3, False), (6, True), (9, True), (6, False), (9, False)],
                                                     {(3, True), (3, False)}))
 def test_five_state_counts_equal(n: int, symmetry: bool) -> None:
     python = explore(_five(n, symmetry=symmetry), progress=False)
@@ -182,3 +182,21 @@ def test_swarm_finds_the_seeded_fault(spec: ir.Spec, tmp_path: Path) -> None:
     report = build_report(run.result)
     (v,) = report.verdicts
     assert v.holds is False and v.trace is not None
+
+
+def test_pan_output_is_parsed(tmp_path: Path) -> None:
+    text = """pan:1: assertion violated (viol!=3) (at depth 2)
+pan: wrote model.pml1.trail
+(Spin Version 6.5.2 -- 6 December 2019)
+State-vector 28 byte, depth reached 27, errors: 1
+    79913 states, stored
+   401220 states, matched
+   481133 transitions (= stored+matched)
+  132.000	total actual memory usage
+pan: elapsed time 0.6 seconds
+"""
+    st = spin.parse_pan(text, tmp_path)
+    assert (st.states, st.transitions, st.depth, st.errors, st.seconds) == (79913, 481133, 27, 1, 0.6)
+    assert st.memory_mb == 132.0 and st.complete
+    assert st.trails == [(2, tmp_path / "model.pml1.trail")]
+    assert not spin.parse_pan(text + "error: max search depth too small\n", tmp_path).complete

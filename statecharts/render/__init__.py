@@ -15,7 +15,7 @@ an instruction of the bundled spec):
 * :mod:`~statecharts.render.scxml` -- charts as W3C SCXML;
 * :mod:`~statecharts.render.traceability` -- runs the scenarios to see what they exercise;
 * :mod:`~statecharts.render.reference` -- the Markdown reference;
-* :mod:`~statecharts.render.aoi` -- the add-on instructions of ``spec/aoi/`` (their own
+* :mod:`~statecharts.render.aoi` -- the add-on instructions of ``spec/addons/`` (their own
   loader, :mod:`statecharts.aoi`): reference page, flowchart, recovery-chart diagram;
 * :mod:`~statecharts.render.generate` -- every artefact as bytes, written or checked.
 

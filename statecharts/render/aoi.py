@@ -1,41 +1,30 @@
-"""Add-on instructions (``spec/aoi/``) -> reference page, flowchart and recovery-chart diagram.
+"""Add-on instructions -> reference page, flowchart and recovery-chart diagram.
 
-Pipeline position: ``spec/aoi/*.yaml`` + ``spec/instructions/motion/*.yaml`` ->
-:func:`statecharts.aoi.load_aoi` (schema, expressions, cross-references) -> **this
-module** -> ``generated/aoi/<ID>.md``, ``generated/flowcharts/<ID>.{dot,mmd,svg}`` and
+Pipeline position: ``spec/addons/*.yaml`` -> :func:`statecharts.loader.load_spec` (the
+IR, provenance included) -> :func:`statecharts.aoi.load_aoi` -> **this module** ->
+``generated/aoi/<ID>.md``, ``generated/flowcharts/<ID>.{dot,mmd,svg}`` and
 ``generated/diagrams/<ID>_recovery.{dot,mmd,svg}`` (through ``motionchart generate``,
-``motionchart docs`` and ``motionchart diagram <ID>`` / ``<ID>_recovery``).
-
-:class:`~statecharts.aoi.AoiSpec` keeps what the world model runs (ids, codes, parsed
-expressions, calls); it drops what a reader audits: the ``source`` and
-``interpretation`` of inputs, outputs, codes, transitions and routines, state
-descriptions, data types and line numbers.  :func:`load_aoi_document` therefore loads
-the spec with ``load_aoi`` first (so every problem is reported exactly as the loader
-reports it) and then reads those fields from the same, now known-good, YAML files,
-matching them to the loaded records by position and id.  A few consistency checks the
-renderers rely on (unique check ids, codes, states, inputs and outputs) are added by
-:func:`aoi_problems`, with located diagnostics.
+``motionchart docs`` and ``motionchart diagram <ID>`` / ``<ID>_recovery``).  Nothing here
+reads YAML: sources, interpretations and lines come from the IR.
 
 Nothing here names the bundled instruction: every page, node and edge is derived from
 the loaded data, in spec order (checks, transitions, sub-instruction preconditions) or
-sorted order (error codes), so the same spec gives the same bytes.  The one rule taken
-from the world model rather than the data is the meaning of a check's ``applies``: the
-value of :data:`APPLIES_INPUT` for which the check runs (``statecharts.aoi.World``).
+sorted order (error codes), so the same spec gives the same bytes.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import graphviz
 
-from statecharts.aoi import AoiSpec, RecoveryState, SubInstruction, aoi_files, load_aoi
-from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
-from statecharts.loader import bundled_spec_dir, read_yaml
+from statecharts import ir
+from statecharts.aoi import AoiSpec, SubInstruction, load_aoi
+from statecharts.diagnostics import Diagnostic, SpecError
+from statecharts.ir import RecoveryState
+from statecharts.loader import bundled_spec_dir
 from statecharts.render.dot import FONT, MONO, esc, html_lines, html_table, sorted_attrs
 from statecharts.render.flowchart import Flowchart, FlowEdge, FlowNode, flowchart_dot
 from statecharts.render.labels import paragraph, wrap
@@ -52,8 +41,6 @@ from statecharts.render.reference import (
 )
 from statecharts.render.traceability import Traceability
 
-#: The input a check's ``applies`` value is compared with (as ``statecharts.aoi.World`` does).
-APPLIES_INPUT = "Cfg_SyncType"
 #: Suffix of the recovery chart's diagram name (``motionchart diagram <ID>_recovery``).
 RECOVERY_SUFFIX = "_recovery"
 #: What the ``axis`` / ``master`` of a call refers to.
@@ -94,7 +81,6 @@ class CheckRow:
     number: int  # 1-based, the order of evaluation
     id: str
     code: int
-    applies: int | None
     fails: str
     prov: Prov
 
@@ -173,7 +159,7 @@ class AoiDocument:
     """An add-on instruction as the renderers need it: the loaded spec plus provenance."""
 
     spec: AoiSpec
-    file: str  # as shown: spec/aoi/sync_pth_phy_ax.yaml
+    file: str  # as shown: spec/addons/raM_Opr_SyncPthPhyAx_CD.yaml
     prov: Prov
     execution: str
     execution_source: str
@@ -213,7 +199,7 @@ class AoiDocument:
 
 
 def shown_path(path: Path, spec_dir: Path) -> str:
-    """``spec/aoi/x.yaml`` for the bundled spec, ``<dir name>/aoi/x.yaml`` otherwise; never absolute."""
+    """``spec/addons/x.yaml`` for the bundled spec, ``<dir name>/addons/x.yaml`` otherwise; never absolute."""
     root = spec_dir.resolve()
     try:
         rel = path.resolve().relative_to(root).as_posix()
@@ -229,7 +215,7 @@ def shown_path(path: Path, spec_dir: Path) -> str:
 def aoi_spec_dirs(paths: Sequence[Path | str] | None) -> list[Path]:
     """The spec directories whose add-on instructions go with a spec given as ``paths``.
 
-    No paths: the bundled spec.  Otherwise every given directory that has an ``aoi/``
+    No paths: the bundled spec.  Otherwise every given directory that has an ``addons/``
     or an ``instructions/motion/`` sub-directory (a file or a directory without either
     has no add-on instruction).
     """
@@ -238,170 +224,55 @@ def aoi_spec_dirs(paths: Sequence[Path | str] | None) -> list[Path]:
     dirs: list[Path] = []
     for p in paths:
         d = Path(p)
-        if (d.is_dir() and ((d / "aoi").is_dir() or (d / "instructions" / "motion").is_dir())
+        if (d.is_dir() and ((d / "addons").is_dir() or (d / "instructions" / "motion").is_dir())
                 and all(d.resolve() != x.resolve() for x in dirs)):
             dirs.append(d)
     return dirs
 
 
-def _prov(node: Any, tree: Any, parts: tuple[Any, ...]) -> Prov:
-    interp = node.get("interpretation") if isinstance(node, dict) else None
-    source = node.get("source", "") if isinstance(node, dict) else ""
-    return Prov(str(source), str(interp) if interp else None, locate(tree, parts)[0])
-
-
-def _read(path: Path, errors: list[Diagnostic]) -> Any:
-    tree = read_yaml(path, errors)
-    if tree is None and not errors:
-        errors.append(Diagnostic(str(path), 1, 1, "", "the file is empty; expected a `format:` line and its document"))
-    return tree
-
-
-def _loader_diagnostics(exc: SpecError, spec_dir: Path, files: Sequence[Path]) -> list[Diagnostic]:
-    """The loader's diagnostics, with two gaps filled: a file count reported against the
-    bundled directory whatever directory was read, and an empty file reported by nothing."""
-    out: list[Diagnostic] = []
-    bundled_aoi = str(bundled_spec_dir() / "aoi")
-    for d in exc.diagnostics:
-        if d.file == bundled_aoi and "add-on instruction file" in d.message:
-            d = dataclasses.replace(d, file=str(spec_dir / "aoi"))
-        out.append(d)
-    for f in files:
-        scratch: list[Diagnostic] = []
-        if read_yaml(f, scratch) is None and not scratch:
-            out.append(Diagnostic(str(f), 1, 1, "", "the file is empty; expected a `format:` line and its document"))
-    return out
+def _prov(p: ir.Provenance, at: ir.Location) -> Prov:
+    return Prov(p.source, p.interpretation, at.line)
 
 
 def load_aoi_document(spec_dir: Path | str | None = None) -> AoiDocument:
-    """Load the add-on instruction of ``spec_dir`` (default: bundled) with its provenance.
+    """The add-on instruction of ``spec_dir`` (default: bundled) with its provenance, from the IR.
 
-    Raises :class:`SpecError` with every located problem (the loader's and
-    :func:`aoi_problems`'), never another exception for bad input.
+    Raises :class:`SpecError` with every located problem the loader finds.
     """
     root = Path(spec_dir) if spec_dir is not None else bundled_spec_dir()
-    aoi_paths, sub_paths = aoi_files(root)
-    try:
-        spec = load_aoi(root)
-    except SpecError as exc:
-        raise SpecError(_loader_diagnostics(exc, root, [*sub_paths, *aoi_paths])) from None
-    errors: list[Diagnostic] = []
-    subs: list[SubDocument] = []
-    by_mnemonic = {s.mnemonic: s for s in spec.instructions}
-    seen: dict[str, str] = {}
-    for p in sub_paths:
-        tree = _read(p, errors)
-        if tree is None:
-            continue
-        d = tree["instruction"]
-        mnemonic = str(d["mnemonic"])
-        if mnemonic in seen:
-            line, col = locate(tree, ("instruction", "mnemonic"))
-            errors.append(Diagnostic(str(p), line, col, "instruction.mnemonic",
-                                     f"sub-instruction {mnemonic!r} is also defined in {seen[mnemonic]}"))
-            continue
-        seen[mnemonic] = shown_path(p, root)
-        sub = by_mnemonic[mnemonic]
-        base = ("instruction",)
-        rows = tuple(
-            SubCheckRow(n, str(c["fails"]), int(c["err"]), _prov(c, tree, (*base, "checks", n - 1)))
-            for n, c in enumerate(d["checks"], start=1)
-        )
-        subs.append(SubDocument(sub, shown_path(p, root), tuple(str(t) for t in d["axis_types"]), rows,
-                                _prov(d["completes"], tree, (*base, "completes")), _prov(d, tree, base)))
-    path = aoi_paths[0]
-    tree = _read(path, errors)
-    if tree is None:
-        raise SpecError(errors)
-    d = tree["aoi"]
-    base = ("aoi",)
-    inputs = tuple(
-        Operand(str(i["name"]), str(i["type"]), str(i["data_type"]) if "data_type" in i else None, i.get("default"),
-                _prov(i, tree, (*base, "inputs", n)))
-        for n, i in enumerate(d["inputs"])
+    spec = load_aoi(None if spec_dir is None else root)
+    a = spec.add_on
+    subs = tuple(SubDocument(sub, shown_path(Path(sub.location.file), root), sub.axis_types,
+                             tuple(SubCheckRow(n, c.fails.text, c.err, _prov(c.provenance, c.location))
+                                   for n, c in enumerate(sub.checks, start=1)),
+                             _prov(sub.completes, sub.completes_location), _prov(sub.provenance, sub.location))
+                 for sub in sorted(spec.instructions, key=lambda x: x.mnemonic))
+    rec = a.recovery
+
+    def routine(r: ir.ScanRule) -> Routine:
+        return Routine(r.clear, r.abort_call, r.forget, _prov(r.provenance, r.location))
+
+    world = tuple(WorldObject(o.kind, o.chart, tuple(
+        WorldFact(fa.name, fa.when.text if fa.when is not None else f"variable {fa.variable}",
+                  tuple(f"{_value(x.value)}: {', '.join(x.fire)}" for x in fa.set), _prov(fa.provenance, fa.location))
+        for fa in o.facts), _prov(o.provenance, o.location)) for o in a.world.objects)
+    return AoiDocument(
+        spec=spec, file=shown_path(Path(a.location.file), root), prov=_prov(a.provenance, a.location),
+        execution=a.execution.mode, execution_source=a.execution.provenance.source,
+        inputs=tuple(Operand(p.name, p.type, p.data_type, p.default, _prov(p.provenance, p.location))
+                     for p in a.parameters),
+        outputs=tuple(Operand(m.name, m.type, None, None, _prov(m.provenance, m.location)) for m in a.status),
+        errors=tuple(ErrorCode(e.code, e.name, _prov(e.provenance, e.location)) for e in a.errors),
+        checks=tuple(CheckRow(n, c.id, c.err, c.fails_when.text, _prov(c.provenance, c.location))
+                     for n, c in enumerate(a.checks, start=1)),
+        recovery=_prov(rec.provenance, rec.location),
+        states=tuple(StateRow(st, st.description, _prov(st.provenance, st.location)) for st in rec.states),
+        transitions=tuple(TransitionRow(n, t.source, t.target, t.when.text, _prov(t.provenance, t.location))
+                          for n, t in enumerate(rec.transitions, start=1)),
+        on_done=tuple(OnDone(o.when.text, o.set, _prov(o.provenance, o.location)) for o in a.on_done),
+        rung_false=routine(a.rung_false), prescan=routine(a.prescan), subs=subs, world=world,
+        world_prov=_prov(a.world.provenance, a.world.location),
     )
-    outputs = tuple(Operand(str(o["name"]), str(o["type"]), None, None, _prov(o, tree, (*base, "outputs", n)))
-                    for n, o in enumerate(d["outputs"]))
-    codes = tuple(ErrorCode(int(e["code"]), str(e["name"]), _prov(e, tree, (*base, "errors", n)))
-                  for n, e in enumerate(d["errors"]))
-    checks = tuple(
-        CheckRow(n + 1, c.id, c.code, c.applies, c.fails.text, _prov(d["checks"][n], tree, (*base, "checks", n)))
-        for n, c in enumerate(spec.checks)
-    )
-    rec = d["recovery"]
-    states = tuple(
-        StateRow(s, str(rec["states"][n].get("description", "")),
-                 _prov(rec["states"][n], tree, (*base, "recovery", "states", n)))
-        for n, s in enumerate(spec.states)
-    )
-    transitions = tuple(
-        TransitionRow(n + 1, t.source_state, t.target, t.when.text,
-                      _prov(rec["transitions"][n], tree, (*base, "recovery", "transitions", n)))
-        for n, t in enumerate(spec.transitions)
-    )
-    on_done = tuple(OnDone(w.text, target, _prov(d["on_done"][n], tree, (*base, "on_done", n)))
-                    for n, (w, target) in enumerate(spec.on_done))
-    rung_false = Routine(spec.rung_false_clear, spec.abort_call, (),
-                         _prov(d["rung_false"], tree, (*base, "rung_false")))
-    prescan = Routine(spec.prescan_clear, None, spec.prescan_forget, _prov(d["prescan"], tree, (*base, "prescan")))
-    world, world_prov = _world(d, tree)
-    doc = AoiDocument(
-        spec=spec, file=shown_path(path, root), prov=_prov(d, tree, base), execution=str(d["execution"]),
-        execution_source=str(d.get("execution_source", "")), inputs=inputs, outputs=outputs, errors=codes,
-        checks=checks, recovery=_prov(rec, tree, (*base, "recovery")), states=states, transitions=transitions,
-        on_done=on_done, rung_false=rung_false, prescan=prescan,
-        subs=tuple(sorted(subs, key=lambda s: s.sub.mnemonic)), world=world, world_prov=world_prov,
-    )
-    errors.extend(aoi_problems(doc, str(path), tree))
-    if errors:
-        raise SpecError(errors)
-    return doc
-
-
-def _world(d: Any, tree: Any) -> tuple[tuple[WorldObject, ...], Prov | None]:
-    """The optional `world` section (which chart runs each kind of object), read as written."""
-    w = d.get("world")
-    if not isinstance(w, dict):
-        return (), None
-    objects: list[WorldObject] = []
-    for i, o in enumerate(w.get("objects") or ()):
-        if not isinstance(o, dict):
-            continue
-        base = ("aoi", "world", "objects", i)
-        facts: list[WorldFact] = []
-        for j, f in enumerate(o.get("facts") or ()):
-            if not isinstance(f, dict):
-                continue
-            read = f"{f['when']}" if "when" in f else f"variable {f['variable']}" if "variable" in f else ""
-            sets = tuple(f"{_value(x.get('value'))}: {', '.join(str(e) for e in x.get('fire') or ())}"
-                         for x in f.get("set") or () if isinstance(x, dict))
-            facts.append(WorldFact(str(f.get("name", "")), read, sets, _prov(f, tree, (*base, "facts", j))))
-        objects.append(WorldObject(str(o.get("kind", "")), str(o.get("chart", "")), tuple(facts),
-                                   _prov(o, tree, base)))
-    return tuple(objects), _prov(w, tree, ("aoi", "world"))
-
-
-def aoi_problems(doc: AoiDocument, file: str, tree: Any) -> list[Diagnostic]:
-    """Duplicates the loader lets through but pages, anchors and diagram nodes cannot take."""
-    out: list[Diagnostic] = []
-
-    def unique(kind: str, key: str, values: Sequence[object]) -> None:
-        seen: dict[object, int] = {}
-        for n, v in enumerate(values):
-            if v in seen:
-                parts = ("aoi", *key.split("."), n)
-                line, col = locate(tree, parts)
-                first = f"{node_path(('aoi', *key.split('.'), seen[v]))}"
-                out.append(Diagnostic(file, line, col, node_path(parts), f"duplicate {kind} {v!r} (first at {first})"))
-            else:
-                seen[v] = n
-
-    unique("check id", "checks", [c.id for c in doc.checks])
-    unique("error code", "errors", [e.code for e in doc.errors])
-    unique("input", "inputs", [i.name for i in doc.inputs])
-    unique("output", "outputs", [o.name for o in doc.outputs])
-    unique("state id", "recovery.states", [s.state.id for s in doc.states])
-    return out
 
 
 def load_aoi_documents(paths: Sequence[Path | str] | None) -> list[AoiDocument]:
@@ -413,13 +284,13 @@ def load_aoi_documents(paths: Sequence[Path | str] | None) -> list[AoiDocument]:
     errors: list[Diagnostic] = []
     for d in aoi_spec_dirs(paths):
         try:
-            docs.append(load_aoi_document(d))
+            docs.append(load_aoi_document(None if paths is None or not paths else d))
         except SpecError as exc:
             errors.extend(exc.diagnostics)
     seen: dict[str, AoiDocument] = {}
     for doc in docs:
         if doc.id in seen:
-            errors.append(Diagnostic(doc.file, doc.prov.line, 1, "aoi.id",
+            errors.append(Diagnostic(doc.file, doc.prov.line, 1, "add_on_instruction.id",
                                      f"add-on instruction {doc.id!r} is also defined in {seen[doc.id].file}"))
         seen.setdefault(doc.id, doc)
     if errors:
@@ -428,10 +299,6 @@ def load_aoi_documents(paths: Sequence[Path | str] | None) -> list[AoiDocument]:
 
 
 # --------------------------------------------------------------------------- wording
-
-
-def applies_text(applies: int | None) -> str:
-    return "every execution" if applies is None else f"{APPLIES_INPUT} = {applies}"
 
 
 def call_text(state: RecoveryState) -> str:
@@ -494,8 +361,6 @@ def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
         did, eid = f"check_{check.id}", f"err_{check.id}"
         name = doc.error_name(check.code) or check.id
         title = [f"{check.number}. {line}" if i == 0 else line for i, line in enumerate(paragraph(name + "?", 30))]
-        if check.applies is not None:
-            title.append(f"(only when {applies_text(check.applies)})")
         nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(check.fails, 30))))
         nodes.append(FlowNode(eid, "error", ("Sts_ER set", f"Sts_ERR = {check.code}", *paragraph(name, 34))))
         edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
@@ -503,7 +368,7 @@ def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
         side.append((did, eid))
         prev = did
 
-    initial = spec.initial
+    initial = spec.add_on.recovery.initial
     nodes.append(FlowNode("recovery", "process", ("Every check passed:", f"the recovery leaves {initial}")))
     edges.append(FlowEdge(prev, "recovery", "no" if prev.startswith("check_") else ""))
     prev, label = "recovery", ""
@@ -546,7 +411,7 @@ def build_aoi_flowchart(doc: AoiDocument) -> Flowchart:
 
     note = (
         "The checks run top to bottom when an execution starts; the first that holds sets Sts_ER and its code,",
-        f"which stay until the rung goes false. A check marked with {APPLIES_INPUT} is skipped for other values.",
+        "which stay until the rung goes false.",
         "A call's own preconditions fail with the state's code and the call's .ERR in Sts_EXERR.",
     )
     spine = ("start", "execute", *(f"check_{c.id}" for c in doc.checks), "recovery",
@@ -572,7 +437,7 @@ _ERROR = ("#a31515", "dashed")
 def _state_compartment(doc: AoiDocument, row: StateRow) -> list[str]:
     s = row.state
     lines: list[str] = []
-    if s.id == doc.spec.initial:
+    if s.id == doc.spec.add_on.recovery.initial:
         lines.append(f"checks 1 to {len(doc.checks)} run here, in order" if doc.checks else "no checks")
     if s.call is not None:
         lines.append(f"call {call_text(s)}")
@@ -655,10 +520,10 @@ def recovery_dot(doc: AoiDocument) -> str:
         g.edge(tail, head, **sorted_attrs(attrs))
 
     g.edge("__initial__", "idle")
-    edge("idle", spec.initial, ["rung true:", "new execution"], *_DERIVED, "new execution")
+    edge("idle", spec.add_on.recovery.initial, ["rung true:", "new execution"], *_DERIVED, "new execution")
     for t, label in zip(doc.transitions, _transition_labels(doc)):
         edge(t.source, t.target, wrap(label, 30), "#000000", "solid", f"transition {t.number}")
-    edge(spec.initial, _ERROR_NODE, ["[a check fails]", "/ Sts_ERR = its code"], *_ERROR, "a check fails")
+    edge(spec.add_on.recovery.initial, _ERROR_NODE, ["[a check fails]", "/ Sts_ERR = its code"], *_ERROR, "a check fails")
     for row in doc.states:
         s = row.state
         if s.call is not None:
@@ -691,10 +556,10 @@ def recovery_mermaid(doc: AoiDocument) -> str:
             out.append(f"{INDENT}{_mid(s.id)} : {text(line.strip())}")
     out.append(f'{INDENT}state "error" as {_MERMAID_ERROR}')
     out.append(f"{INDENT}{_MERMAID_ERROR} : {text('Sts_ER = 1, Sts_ERR = code, Sts_EXERR; held until the rung goes false')}")
-    out.append(f"{INDENT}{_mid('idle')} --> {_mid(spec.initial)} : {text('rung true: new execution')}")
+    out.append(f"{INDENT}{_mid('idle')} --> {_mid(spec.add_on.recovery.initial)} : {text('rung true: new execution')}")
     for t, label in zip(doc.transitions, _transition_labels(doc)):
         out.append(f"{INDENT}{_mid(t.source)} --> {_mid(t.target)} : {text(label)}")
-    out.append(f"{INDENT}{_mid(spec.initial)} --> {_MERMAID_ERROR} : {text('[a check fails] / Sts_ERR = its code')}")
+    out.append(f"{INDENT}{_mid(spec.add_on.recovery.initial)} --> {_MERMAID_ERROR} : {text('[a check fails] / Sts_ERR = its code')}")
     for row in doc.states:
         s = row.state
         if s.call is not None:
@@ -796,13 +661,12 @@ def aoi_page(doc: AoiDocument, tr: Traceability, catalog: dict[int, str] | None 
     out += ["", "## Checks, in the order they run", "",
             "When an execution starts (the rung goes true after being false) the checks are tried from the "
             "top. The first whose condition holds ends the execution: `Sts_ER` is set and `Sts_ERR` takes the "
-            "check's code. A check with a value in *Applies to* is skipped when "
-            f"`{APPLIES_INPUT}` has another value. When no check holds, the recovery chart takes over.", ""]
-    out += table(["#", "Check", "Code", "Applies to", "Fails when", "Error", "Source", "Interpretation",
+            "check's code. When no check holds, the recovery chart takes over.", ""]
+    out += table(["#", "Check", "Code", "Fails when", "Error", "Source", "Interpretation",
                   "Defined at"], [
         [str(c.number), f'<a id="{anchor("check-" + c.id)}"></a>`{c.id}`',
          f"[{c.code}](#{anchor('code-' + str(c.code))})",
-         "all" if c.applies is None else f"`{APPLIES_INPUT} = {c.applies}`", code(c.fails),
+         code(c.fails),
          cell(doc.error_name(c.code)), cell(c.prov.source), _interp(c.prov, p), _where(doc, c.prov)]
         for c in doc.checks
     ])
@@ -822,7 +686,7 @@ def aoi_page(doc: AoiDocument, tr: Traceability, catalog: dict[int, str] | None 
                  + (["Scenarios"] if traced else []), rows)
 
     out += ["", "## Recovery chart", "",
-            f"Once every check has passed, the execution leaves `{doc.spec.initial}` by the first transition "
+            f"Once every check has passed, the execution leaves `{doc.spec.add_on.recovery.initial}` by the first transition "
             "whose condition holds (transitions are tried in the order listed) and moves from state to state. "
             "A state with a call issues one motion instruction; its preconditions are checked first, and the "
             "first that fails ends the execution with the state's code. A call is complete when "
@@ -841,7 +705,7 @@ def aoi_page(doc: AoiDocument, tr: Traceability, catalog: dict[int, str] | None 
     out += table(["State", "Meaning", "Call", "Operands", "Code if the call fails", "Source", "Interpretation",
                   "Defined at"] + (["Scenarios observing it"] if traced else []), [
         [f'<a id="{anchor("state-" + r.state.id)}"></a>`{r.state.id}`'
-         + (" (entered first)" if r.state.id == doc.spec.initial else ""),
+         + (" (entered first)" if r.state.id == doc.spec.add_on.recovery.initial else ""),
          cell(r.description),
          (f"[{r.state.call.instruction}](#{anchor('sub-' + r.state.call.instruction)}) on the "
           + cell(call_text(r.state).split(" on the ", 1)[1])) if r.state.call else "—",
@@ -1002,13 +866,11 @@ INDEX_HEADER = ("Add-on instruction", "Checks", "Codes", "Recovery states", "Cal
 
 
 __all__ = [
-    "APPLIES_INPUT",
     "INDEX_HEADER",
     "AoiDocument",
     "aoi_flowchart_dot",
     "aoi_flowchart_mermaid",
     "aoi_page",
-    "aoi_problems",
     "aoi_spec_dirs",
     "aoi_uses",
     "build_aoi_flowchart",

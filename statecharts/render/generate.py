@@ -10,7 +10,7 @@ Layout of the output directory::
     diagrams/<chart>.{dot,mmd,svg}
     flowcharts/<MNEMONIC>.{dot,mmd,svg}
     scxml/<chart>.scxml         (``generate`` only)
-    aoi/<AOI>.md                add-on instructions (``spec/aoi/``), with
+    aoi/<AOI>.md                add-on instructions (``spec/addons/``), with
     flowcharts/<AOI>.{dot,mmd,svg}, diagrams/<AOI>_recovery.{dot,mmd,svg}
 
 The bytes depend only on the spec and the scenarios: sorted or spec-ordered content,
@@ -82,7 +82,7 @@ def _readme() -> str:
         "- `diagrams/`: state diagrams as Graphviz DOT, Mermaid and SVG",
         "- `flowcharts/`: instruction flowcharts as Graphviz DOT, Mermaid and SVG (also those of the "
         "add-on instructions)",
-        "- `aoi/`: one page per add-on instruction (`spec/aoi/`): inputs, ordered checks, error codes, "
+        "- `aoi/`: one page per add-on instruction (`spec/addons/`): inputs, ordered checks, error codes, "
         "recovery chart (`diagrams/<id>_recovery.*`), the motion instructions it calls",
         "- `scxml/`: each chart as W3C SCXML (loads with `statemachine.io.load(path, format=\"scxml\")`)", "",
     ])

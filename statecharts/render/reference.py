@@ -550,7 +550,7 @@ def table_blocks_note() -> str:
 
 
 def interpretations_page(spec: ir.Spec, extra_uses: dict[str, list[Use]] | None = None) -> str:
-    """``extra_uses``: users outside the IR (the add-on instructions of ``spec/aoi/``)."""
+    """``extra_uses``: users outside the IR (the add-on instructions of ``spec/addons/``)."""
     uses = interpretation_uses(spec)
     for k, more in sorted((extra_uses or {}).items()):
         uses[k] = sorted(set(uses.get(k, [])) | set(more), key=lambda u: u.label)
@@ -702,7 +702,7 @@ def index_page(spec: ir.Spec, *, scxml: bool, aoi_table: tuple[Sequence[str], Se
     if aoi_table is not None:
         header, rows = aoi_table
         out += ["", "## Add-on instructions", "",
-                "Instructions defined in `spec/aoi/` that call motion instructions (`spec/instructions/motion/`): "
+                "Instructions defined in `spec/addons/` that call motion instructions (`spec/instructions/motion/`): "
                 "their ordered checks, error codes and recovery chart.", ""]
         out += table(list(header), rows)
     out += ["", "## Cross-references", "",

@@ -68,13 +68,16 @@ from typing import Any, cast
 
 from checker.model import Flat, Model
 from checker.properties import Property
-from statecharts import ir
+from statecharts import drive, ir
 from statecharts.scan import Done, Errored, Executed
 
 #: scan modes of a block
 NORMAL, COARSE, PRESCAN = 0, 1, 2
 #: input kinds of a choice (PRESCAN_PASS applies to every block)
 NOTHING, RAISE, DROP, EVENT, PRESCAN_PASS = 0, 1, 2, 3, 4
+#: a RAISE, DROP or EVENT together with a drive event of the axis: kind + WITH_DRIVE,
+#: argument (the base argument, the drive event)
+WITH_DRIVE = 10
 _CONDITIONS = ("rung_false", "rung_true", "prescan")
 
 State = tuple[int, ...]
@@ -167,6 +170,9 @@ class CompiledModel:
             assert c.axis is not None and c.event is not None
             self.events.append((c.index, axis_no[c.axis], c.event))
         self.tag_local = local_of
+        #: base choice -> its combinations with a drive event: (choice, drive event)
+        self.combos: dict[int, list[tuple[int, str]]] = {
+            b: [(c.index, str(c.drive)) for c in cs] for b, cs in model.drive_combos.items()}
 
         # per-tag derived facts of tag parts, computed on first use
         self._rung: list[bool] = []
@@ -181,6 +187,10 @@ class CompiledModel:
         self._drop: list[dict[int, int]] = [{} for _ in model.slots]
         self._tick: list[dict[int, int]] = [{} for _ in model.axes]
         self._event: list[dict[tuple[int, str], int]] = [{} for _ in model.axes]
+        #: per axis, its chart's drive events in the order the scan applies them (after the tick)
+        self._drive: list[tuple[str, ...]] = [
+            tuple(e for e in drive.EVENTS if any(x.name == e and x.kind == "drive" for x in a.chart.events))
+            for a in model.axes]
         self._tag_post: list[dict[tuple[int, bool, int], tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
             {} for _ in model.slots]
         self._axis_post: list[dict[int, tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
@@ -233,6 +243,7 @@ class CompiledModel:
                 self._remap[ai] = dict(zip(theirs, own))
                 self._remap_back[ai] = dict(zip(own, theirs))
         self.canonical_fast = self._canonical_function()
+        self._single = self.naxes == 1 and not self.symmetric_groups and not self.use_block_memo
         self._group_of = [-1] * self.naxes
         for g, group in enumerate(self.symmetric_groups):
             for ai in group:
@@ -743,6 +754,11 @@ class CompiledModel:
         (axis core, queue, held events, events to apply now, tags scanned, tags watched)."""
         core, q, h = self._split[aid]
         tis = self.tis[ai]
+        extra: str | None = None
+        if kind >= WITH_DRIVE:
+            kind -= WITH_DRIVE
+            assert type(arg) is tuple  # a combined choice's argument is (base argument, drive event)
+            arg, extra = arg
         if active is None or mode == PRESCAN:
             order: tuple[int, ...] = tuple(range(len(tis)))
             watch = ()
@@ -766,6 +782,8 @@ class CompiledModel:
         elif kind == EVENT:
             assert type(arg) is str  # an EVENT choice's argument is its event name
             h = (*h, arg)
+        if extra is not None:
+            h = (*h, extra)
         rung = self._rung
         pending = self._pending
         rows = self._rows
@@ -792,6 +810,14 @@ class CompiledModel:
         events = h
         t = self._tick[ai].get(core)
         core = t if t is not None else self.piece_tick(ai, core)
+        drive_events = self._drive[ai]
+        if drive_events and events:
+            # the drive model's outcomes come right after the tick (System._coarse_update)
+            for ev in drive_events:
+                if ev in events:
+                    e = self._event[ai].get((core, ev))
+                    core = e if e is not None else self.piece_event(ai, core, ev)
+            events = tuple(ev for ev in events if ev not in drive_events)
         finish = self._finish
         for j in order:
             tid = tags[j]
@@ -900,15 +926,22 @@ class CompiledModel:
         if limit is not None:
             live_flags = [self.live0(ti, state[start + 1 + j]) or j in q for j, ti in enumerate(tis)]
             nlive = sum(live_flags)
+        combos = self.combos
         for j, ti in enumerate(tis):
             if rung[state[start + 1 + j]]:
                 out.append((self.drops[ti], DROP, j, None))
+                for c2, d in combos.get(self.drops[ti], ()):
+                    out.append((c2, DROP + WITH_DRIVE, j, (None, d)))
             elif limit is None or nlive < limit or (live_flags is not None and live_flags[j]):
                 for c, kk in self.raises[ti]:
                     out.append((c, RAISE, j, kk))
+                    for c2, d in combos.get(c, ()):
+                        out.append((c2, RAISE + WITH_DRIVE, j, (kk, d)))
         for c, a, ev in self.events:
             if a == ai:
                 out.append((c, EVENT, 0, ev))
+                for c2, d in combos.get(c, ()):
+                    out.append((c2, EVENT + WITH_DRIVE, 0, (ev, d)))
         return out
 
     def moves(self, ai: int, state: Sequence[int], mode: int) -> tuple[
@@ -1004,7 +1037,7 @@ class CompiledModel:
             self._block_memo[self._leader[ai]].clear()
         memo[key] = value
 
-    def successors(self, state: State) -> list[tuple[int, State, list[Property], list[Property]]]:
+    def successors(self, state: State) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
         """(choice index, canonical successor, violated, reached) for the enabled choices.
 
         Choices whose successor is the same as the nothing choice's (and that violate
@@ -1015,6 +1048,20 @@ class CompiledModel:
         mode = COARSE if phase % self.spu == 0 else NORMAL
         nphase = (phase + 1) % self.spu
         naxes = self.naxes
+        if self._single:
+            # one axis, no symmetry: a successor is the phase followed by the block
+            (blk, b0, g0), mv = self.moves(0, state, mode)
+            head = (nphase,)
+            out1: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+                (self.nothing_index, head + blk, b0, g0)]
+            for c, b, x, y in mv:
+                out1.append((c, head + b, x, y))
+            if self.has_prescan and not self._busy[state[1]]:
+                self.where = (self.current, self.prescan_index)
+                n = self.block_len[0]
+                a2, t2, pb, pg = self._block(0, state[1], list(state[2:1 + n]), PRESCAN, NOTHING, 0, None)
+                out1.append((self.prescan_index, (nphase, a2, *t2), pb, pg))
+            return out1
         busy = False
         vec = [nphase]
         base_bad: list[Property] = []
@@ -1052,7 +1099,8 @@ class CompiledModel:
             if not busy and self._busy[state[start]]:
                 busy = True
         canonical = self.canonical_fast
-        out = [(self.nothing_index, canonical(vec), base_bad, base_good)]
+        out: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+            (self.nothing_index, canonical(vec), base_bad, base_good)]
         for ai, mv in enumerate(all_moves):
             if not mv:
                 continue

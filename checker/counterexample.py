@@ -170,9 +170,10 @@ def scenario_text(result: SearchResult, trace: Trace, prop: Property | None) -> 
                 lines.append(f"    operands: {_y({c.tag: dict(c.operands)})}")
         elif c.kind == "drop":
             lines.append(f"    rungs: {_y({c.tag: False})}")
-        elif c.kind == "event":
-            lines.append(f"    events: [{_y({'axis': c.axis, 'event': c.event})}]")
-        elif c.kind == "prescan":
+        if c.kind == "event" or c.drive:
+            events = [{"axis": e.axis, "event": e.event} for e in c.inputs.events]
+            lines.append(f"    events: [{', '.join(_y(e) for e in events)}]")
+        if c.kind == "prescan":
             lines.append("    prescan: true")
         lines.append("    expect:")
         for obj, fields in st.observations.items():

@@ -35,6 +35,7 @@ onto a path of this model):
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -46,7 +47,7 @@ from checker.system import SystemDef, initial_assignments, operand_choices
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic
 from statecharts.expr import Expr
-from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System, TagInstance
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ProcessEnded, ScanInputs, System, TagInstance
 
 #: An abstract state: the clock phase, then axis and tag parts of several shapes (see
 #: :meth:`Model.extract`).
@@ -64,16 +65,22 @@ class Choice:
     event: str | None
     operands: tuple[tuple[str, object], ...]
     inputs: ScanInputs = field(compare=False, repr=False)
+    #: a drive event of the axis (a move reaching its target...) in the same scan as
+    #: this raise, drop or environment event: the drive model's outcome is not an input
+    #: a program chooses, so it may come together with one (docs/motion.md)
+    drive: str | None = None
 
     def label(self) -> str:
         if self.kind == "raise":
             ops = ", ".join(f"{k}={v}" for k, v in self.operands)
-            return f"{self.tag} rung up" + (f" ({ops})" if ops else "")
-        if self.kind == "drop":
-            return f"{self.tag} rung down"
-        if self.kind == "event":
-            return f"{self.event} on {self.axis}"
-        return "prescan" if self.kind == "prescan" else "scan"
+            text = f"{self.tag} rung up" + (f" ({ops})" if ops else "")
+        elif self.kind == "drop":
+            text = f"{self.tag} rung down"
+        elif self.kind == "event":
+            text = f"{self.event} on {self.axis}"
+        else:
+            text = "prescan" if self.kind == "prescan" else "scan"
+        return text + (f" + {self.drive}" if self.drive else "")
 
 
 @dataclass(frozen=True, slots=True)
@@ -272,7 +279,8 @@ class Model:
         self.axes: list[Any] = list(self.system.axes.values())
         self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
         # a property tied to a chart the system has no axis of does not apply to it
-        self.properties = tuple(p for p in self.properties if p.chart is None or p.chart in self.charts)
+        self.properties = tuple(p for p in self.properties if (p.chart is None or p.chart in self.charts)
+                                and (not p.systems or sysdef.name in p.systems))
         self.notes: list[str] = []
 
         # cone of influence and the collapse abstraction
@@ -373,20 +381,43 @@ class Model:
         self.event_choices: list[Choice] = []
         for name, g in self.axis_defs:
             chart = self.charts[g.chart]
+            # drive events (a move reaching its target...) are free inputs: the motion abstraction
+            offered = {e.name for e in chart.events if e.kind in ("environment", "drive")}
             events = sysdef.environment if sysdef.environment is not None else tuple(
-                e.name for e in chart.events if e.kind == "environment")
+                e.name for e in chart.events if e.kind in ("environment", "drive"))
             for ev in events:
-                if ev in {e.name for e in chart.events if e.kind == "environment"}:
+                if ev in offered:
                     self.event_choices.append(self._choice(
                         "event", axis=name, event=ev, inputs=ScanInputs(events=(EnvironmentEvent(name, ev),))))
+        # the drive events of each axis also come together with a raise, a drop or an
+        # environment event of that axis (base choice index -> its combined choices)
+        self.drive_combos: dict[int, list[Choice]] = {}
+        drive_of: dict[str, list[str]] = {}
+        for c in self.event_choices:
+            assert c.axis is not None
+            chart = self.charts[dict(self.axis_defs)[c.axis].chart]
+            if any(e.name == c.event and e.kind == "drive" for e in chart.events):
+                drive_of.setdefault(c.axis, []).append(str(c.event))
+        bases: list[tuple[str, Choice]] = []
+        for tag, raises, drop in zip(self.tags, self.raise_choices, self.drop_choice):
+            bases.extend((tag.axis, c) for c in (*raises, drop))
+        bases.extend((str(c.axis), c) for c in self.event_choices if c.event not in drive_of.get(str(c.axis), ()))
+        for axis, base in bases:
+            for d in drive_of.get(axis, ()):
+                inputs = dataclasses.replace(base.inputs, events=(*base.inputs.events, EnvironmentEvent(axis, d)))
+                combo = self._choice(base.kind, tag=base.tag, axis=base.axis if base.kind == "event" else axis,
+                                     event=base.event, operands=base.operands, inputs=inputs, drive=d)
+                self.drive_combos.setdefault(base.index, []).append(combo)
         self.fixed_choices = list(self.event_choices)
+        for c in self.event_choices:
+            self.fixed_choices.extend(self.drive_combos.get(c.index, ()))
         self.prescan = self._choice("prescan", inputs=ScanInputs(prescan=True)) if sysdef.prescan else None
         self.nothing = self._choice("nothing", inputs=ScanInputs())
         self.fixed_choices.append(self.nothing)
 
         # run-time buffers and memo tables
         self.monitor_values: list[tuple[int, ...]] = [tuple(0 for _ in s.monitors) for s in self.slots]
-        self.trace: list[Executed | Errored | Done] = []
+        self.trace: list[Executed | Errored | Done | ProcessEnded] = []
         self.fired: list[list[str]] = [[] for _ in self.axes]
         for axis, f in zip(self.axes, self.fired):
             axis.fired = f
@@ -396,8 +427,8 @@ class Model:
     # -- construction helpers ----------------------------------------------------
 
     def _choice(self, kind: str, *, tag: str | None = None, axis: str | None = None, event: str | None = None,
-                operands: tuple[tuple[str, object], ...] = (), inputs: ScanInputs) -> Choice:
-        c = Choice(len(self.choices), kind, tag, axis, event, operands, inputs)
+                operands: tuple[tuple[str, object], ...] = (), inputs: ScanInputs, drive: str | None = None) -> Choice:
+        c = Choice(len(self.choices), kind, tag, axis, event, operands, inputs, drive)
         self.choices.append(c)
         return c
 
@@ -414,8 +445,9 @@ class Model:
             variables.update(dict(g.configurations[ci].variables))
             axes.append(make(self.spec.chart(g.chart), name, state=g.state, variables=variables,
                              parameters=self.params))
+        # motion=False: the drive model's arithmetic is abstracted away (its events are inputs)
         return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
-                      coarse_update_ms=self.sysdef.coarse_update_ms)
+                      coarse_update_ms=self.sysdef.coarse_update_ms, motion=False)
 
     # -- state <-> system -----------------------------------------------------------
 
@@ -506,11 +538,15 @@ class Model:
             for s in self.slots:
                 if self._live(s, queue):
                     live[s.axis_index] += 1
+        combos = self.drive_combos
         for ti, s in enumerate(self.slots):
             if s.tag.rung:
                 out.append(self.drop_choice[ti])
+                out.extend(combos.get(self.drop_choice[ti].index, ()))
             elif limit is None or live[s.axis_index] < limit or self._live(s, queue):
-                out.extend(self.raise_choices[ti])
+                for c in self.raise_choices[ti]:
+                    out.append(c)
+                    out.extend(combos.get(c.index, ()))
         out.extend(self.fixed_choices)
         # A prescan pass counts as a scan of the coarse-update clock but runs no coarse
         # update; offered only when nothing waits for one, so that requests and events

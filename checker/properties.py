@@ -86,6 +86,8 @@ class Property:
     cover: str | None = None
     variable: str | None = None
     unreachable: tuple[Unreachable, ...] = ()
+    #: the systems the property is checked on (empty: every system with its chart)
+    systems: tuple[str, ...] = ()
 
     def names(self) -> frozenset[str]:
         """Every name the property's expressions read."""
@@ -265,6 +267,7 @@ def _build(
         chart=node.get("chart"), instruction=node.get("instruction"), where=expr("where"), holds=expr("holds"),
         goal=expr("goal"), trigger=expr("trigger"), response=expr("response"), unless=expr("unless"),
         within=int(node.get("within", 1)), cover=cover, variable=variable, unreachable=unreachable,
+        systems=tuple(str(x) for x in node.get("systems", ())),
     )
     return prop if len(errors) == before else None
 

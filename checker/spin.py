@@ -363,15 +363,18 @@ def _result(pm: PromelaModel, st: PanStats, runs: list[tuple[int, list[tuple[str
         parent=parent, via=via, depth_of=depth_of, edges=None, initial_assignment=initial_assignment, core=core)
 
 
-def verify(model: Model, opts: SpinOptions, *, progress: Callable[[str], None] | None = None) -> SpinRun:
-    """Verify ``model`` with SPIN; the run's statistics and a report-ready result."""
+def verify(model: Model, opts: SpinOptions, *, progress: Callable[[str], None] | None = None,
+           pm: PromelaModel | None = None) -> SpinRun:
+    """Verify ``model`` with SPIN; the run's statistics and a report-ready result.  ``pm``
+    is a model already built from ``model`` (its tables are then not computed again)."""
     problem = missing_tools()
     if problem is not None:
         raise SpinError(problem)
     t0 = time.perf_counter()
     say = progress or (lambda _m: None)
-    say("computing the per-axis tables")
-    pm = build(model)
+    if pm is None:
+        say("computing the per-axis tables")
+        pm = build(model)
     if opts.workdir is not None:
         workdir = opts.workdir
         workdir.mkdir(parents=True, exist_ok=True)

@@ -212,7 +212,7 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
 
     env_events = doc.get("environment")
     if env_events is not None:
-        known_env = {e.name for c in charts_used.values() for e in c.events if e.kind == "environment"}
+        known_env = {e.name for c in charts_used.values() for e in c.events if e.kind in ("environment", "drive")}
         for j, e in enumerate(env_events):
             if e not in known_env:
                 err(("environment", j), f"{e!r} is not an environment event; expected one of: {', '.join(sorted(known_env))}")

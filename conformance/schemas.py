@@ -36,6 +36,7 @@ CALL = {
     "required": ["tag", "instruction", "axis"],
     "properties": {
         "tag": NAME, "instruction": {"type": "string"}, "axis": NAME,
+        "master": {**NAME, "description": "The axis of the instruction's master axis operand (MAG's Master Axis)."},
         "operands": {"type": "object", "additionalProperties": SCALAR},
     },
 }

@@ -35,7 +35,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.engine import AxisInstance
-from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ProcessEnded, ScanInputs, System
 
 
 class SetupError(ValueError):
@@ -113,7 +113,12 @@ class Session:
             except (KeyError, ValueError) as exc:
                 raise SetupError(f"axis {a['name']}: {exc}") from None
         program = []
+        masters: dict[str, str] = {}
         for p in setup.get("program", []):
+            if "master" in p:
+                if p["master"] not in {a.name for a in axes}:
+                    raise SetupError(f"tag {p['tag']}: unknown master axis {p['master']!r}")
+                masters[p["tag"]] = p["master"]
             if not self.spec.variants(p["instruction"]):
                 try:
                     self.spec.instruction(p["instruction"])
@@ -125,7 +130,7 @@ class Session:
         try:
             from conformance.witness import RecordingSystem
             cls = RecordingSystem if record else System
-            self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms)
+            self.system = cls(spec, axes, program, scan_ms=scan_ms, coarse_update_ms=cu_ms, masters=masters)
         except (KeyError, ValueError) as exc:
             raise SetupError(str(exc)) from None
         for p in setup.get("program", []):
@@ -169,7 +174,7 @@ class Session:
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         si = ScanInputs(rungs=rungs, operands=operands, events=tuple(events), prescan=bool(inputs.get("prescan", False)))
         if self.record:
-            trace: list[Executed | Errored | Done] = []
+            trace: list[Executed | Errored | Done | ProcessEnded] = []
             system.trace = trace
             for axis in system.axes.values():
                 axis.fired.clear()  # type: ignore[attr-defined]  # the recording back end's axes keep what fired
@@ -185,7 +190,7 @@ class Session:
             cid = axis.chart.id
             self.covered.states.update(f"{cid}:{s}" for s in axis.active)
 
-    def _note(self, trace: list[Executed | Errored | Done]) -> None:
+    def _note(self, trace: list[Executed | Errored | Done | ProcessEnded]) -> None:
         cov = self.covered
         from conformance.witness import split_fired
         for axis in self.system.axes.values():

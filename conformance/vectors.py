@@ -259,7 +259,8 @@ def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
         setup = {
             "scan_ms": scenario.scan_ms, "coarse_update_ms": scenario.coarse_update_ms,
             "axes": [_axis_entry(a.name, a.axis_type, a.chart, a.state, dict(a.variables)) for a in scenario.axes],
-            "program": [_program_entry(p.tag, p.instruction, p.axis, dict(p.operands)) for p in scenario.program],
+            "program": [_program_entry(p.tag, p.instruction, p.axis, dict(p.operands), p.master)
+                        for p in scenario.program],
         }
         rungs = {p.tag: False for p in scenario.program}
         inputs: list[dict[str, Any]] = []
@@ -306,8 +307,13 @@ def _axis_entry(name: str, axis_type: str, family: str, state: str | None, varia
     return entry
 
 
-def _program_entry(tag: str, mnemonic: str, axis: str, operands: dict[str, object]) -> dict[str, Any]:
-    return {"tag": tag, "instruction": mnemonic, "axis": axis, "operands": dict(sorted(operands.items()))}
+def _program_entry(tag: str, mnemonic: str, axis: str, operands: dict[str, object],
+                   master: str | None = None) -> dict[str, Any]:
+    entry: dict[str, Any] = {"tag": tag, "instruction": mnemonic, "axis": axis}
+    if master is not None:
+        entry["master"] = master
+    entry["operands"] = dict(sorted(operands.items()))
+    return entry
 
 
 # --------------------------------------------------------------------------- generated vectors
@@ -430,8 +436,8 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
         entry["rungs"] = dict(rungs)
         if c.kind == "raise" and c.operands:
             entry["operands"] = {c.tag: dict(c.operands)}
-        if c.kind == "event":
-            entry["events"] = [{"axis": c.axis, "event": c.event}]
+        if c.kind == "event" or c.drive:
+            entry["events"] = [{"axis": e.axis, "event": e.event} for e in c.inputs.events]
         if c.kind == "prescan":
             entry["prescan"] = True
         inputs.append(entry)

@@ -141,7 +141,7 @@ class Transition:
 @dataclass(frozen=True, slots=True)
 class Event:
     name: str
-    kind: str  # "request" (from an instruction) | "environment" | "clock"
+    kind: str  # "request" (from an instruction) | "environment" | "clock" | "drive"
     description: str
     parameters: tuple[str, ...]
     actions: tuple[Assignment, ...]  # drive-model changes applied before the chart sees it
@@ -163,6 +163,9 @@ class Chart:
     description: str
     provenance: Provenance
     location: Location
+    #: "motion": the chart carries the variables of the drive model of
+    #: :mod:`statecharts.drive`, which advances them at every coarse update
+    drive_model: str | None = None
     #: instance parameters (configuration of each instance, given in a set-up)
     parameters: tuple[ChartParameter, ...] = ()
 
@@ -236,6 +239,10 @@ class ExecutionTable:
     on_accept: tuple[Assignment, ...]  # done when the request is posted
     on_done: tuple[Assignment, ...]  # done when the completion condition holds
     provenance: Provenance
+    #: done when the process an instruction started completes (PC)
+    on_complete: tuple[Assignment, ...] = ()
+    #: done when that process ends without completing (stopped, superseded, faulted)
+    on_end: tuple[Assignment, ...] = ()
 
     def row(self, condition: str) -> TableRow | None:
         for r in self.rows:
@@ -279,6 +286,21 @@ class Request:
 
 
 @dataclass(frozen=True, slots=True)
+class Process:
+    """The process a motion instruction starts once the axis accepts it (IP until it ends).
+
+    After DN the tag stays pending; at every coarse update the process completes (the
+    table's ``on_complete``: PC) when ``complete_when`` holds, else ends (``on_end``: IP
+    cleared, no PC) when ``ends_when`` holds.  Accepting another request of the same
+    ``kind`` on the same axis ends it too (superseded)."""
+
+    kind: str  # "move" | "jog" | "gear" | "home" | "stop" | ...
+    complete_when: Expr | None  # None: the process never completes (MAJ, MAG)
+    ends_when: Expr | None
+    provenance: Provenance
+
+
+@dataclass(frozen=True, slots=True)
 class Instruction:
     """One variant of an instruction: its behaviour on the axes of the charts it lists.
 
@@ -304,6 +326,9 @@ class Instruction:
     provenance: Provenance
     done_provenance: Provenance
     location: Location
+    process: Process | None = None
+    #: the operand naming a second axis (MAG's MasterAxis), read as ``master.X``
+    master_operand: str | None = None
 
 
 @dataclass(frozen=True, slots=True)

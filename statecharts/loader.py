@@ -46,7 +46,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 from ruamel.yaml.tag import Tag
 
-from statecharts import ir, sources
+from statecharts import drive, ir, sources
 from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.expr import (
@@ -86,7 +86,7 @@ FILE_KEYS = frozenset(
 )
 CHART_KEYS = frozenset(
     {"id", "name", "kind", "state_attribute", "axis_types", "description", "variables", "events", "states",
-     "initial", "transitions", "parameters"}
+     "initial", "transitions", "drive_model", "parameters"}
 ) | _PROVENANCE
 CHART_PARAMETER_KEYS = frozenset({"name", "type", "default", "description"}) | _PROVENANCE
 STATE_KEYS = frozenset(
@@ -98,17 +98,18 @@ VALUE_KEYS = frozenset({"value", "meaning", "confidence"}) | _PROVENANCE
 EVENT_KEYS = frozenset({"name", "kind", "description", "actions", "parameters"}) | _PROVENANCE
 INSTRUCTION_KEYS = frozenset(
     {"id", "mnemonic", "name", "charts", "axis_types", "description", "operands", "execution", "execution_table", "checks",
-     "aborts", "request", "done", "status_bits"}
+     "aborts", "request", "done", "status_bits", "process"}
 ) | _PROVENANCE
 OPERAND_KEYS = frozenset(
-    {"name", "type", "domain", "range", "text_values", "default", "description"}
+    {"name", "type", "domain", "range", "text_values", "default", "description", "role"}
 ) | _PROVENANCE
 CHECK_KEYS = frozenset({"id", "fails_when", "err", "exerr", "stage", "description"}) | _PROVENANCE
 ABORT_KEYS = frozenset({"id", "when", "err", "exerr", "description"}) | _PROVENANCE
 REQUEST_KEYS = frozenset({"event", "actions"})
 DONE_KEYS = frozenset({"when"}) | _PROVENANCE
+PROCESS_KEYS = frozenset({"kind", "complete_when", "ends_when"}) | _PROVENANCE
 EXECUTION_TABLE_KEYS = frozenset(
-    {"id", "rows", "on_execute", "on_error", "on_accept", "on_done"}
+    {"id", "rows", "on_execute", "on_error", "on_accept", "on_done", "on_complete", "on_end"}
 ) | _PROVENANCE
 TABLE_ROW_KEYS = frozenset({"condition", "guard", "actions", "execute", "description"}) | _PROVENANCE
 TABLE_BLOCK_KEYS = frozenset({"actions"}) | _PROVENANCE
@@ -157,6 +158,7 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "abort": ABORT_KEYS,
     "request": REQUEST_KEYS,
     "done": DONE_KEYS,
+    "process": PROCESS_KEYS,
     "execution_table": EXECUTION_TABLE_KEYS,
     "table_row": TABLE_ROW_KEYS,
     "table_block": TABLE_BLOCK_KEYS,
@@ -1094,11 +1096,15 @@ class _Builder:
                 priority=int(t.get("priority", 0)), provenance=self.prov(f, p, t), location=self.loc(f, p),
             ))
 
+        drive_model = c.get("drive_model")
+        if drive_model is not None:
+            self._drive_model(f, base, variables, events)
         chart = ir.Chart(
             id=c["id"], name=c["name"], kind=ir.ChartKind(c["kind"]), state_attribute=c["state_attribute"],
             axis_types=tuple(c["axis_types"]), variables=variables, events=tuple(events),
             states=tuple(states), transitions=tuple(transitions), root_initial=root_initial,
             description=str(c.get("description", "")), provenance=self.prov(f, base, c), location=self.loc(f, base),
+            drive_model=drive_model,
             parameters=self.chart_parameters(f, c),
         )
         if any(d.file == f.name for d in self.errors):
@@ -1108,6 +1114,24 @@ class _Builder:
         self._eventless_cycles(f, chart)
         self._assignment_kinds(f, chart, state_nodes, [(i, e.actions) for i, e in enumerate(events)])
         return chart
+
+    def _drive_model(
+        self, f: _File, base: tuple[Any, ...], variables: Sequence[ir.Variable], events: Sequence[ir.Event],
+    ) -> None:
+        """A chart with ``drive_model: motion`` declares the drive model's variables and events."""
+        declared = {v.name: v.type for v in variables}
+        for name, typ in drive.VARIABLES.items():
+            if name not in declared:
+                self.error(f, (*base, "drive_model"), (
+                    f"a chart with the motion drive model declares the variable {name!r} ({typ}); "
+                    f"the drive model needs: {', '.join(drive.VARIABLES)}"))
+            elif declared[name] != typ:
+                self.error(f, (*base, "drive_model"), f"the drive-model variable {name!r} must be of type {typ}, not {declared[name]}")
+        kinds = {e.name: e.kind for e in events}
+        for name in drive.EVENTS:
+            if kinds.get(name) != "drive":
+                self.error(f, (*base, "drive_model"), (
+                    f"a chart with the motion drive model declares the event {name!r} with kind drive"))
 
     def chart_parameters(self, f: _File, c: Node) -> tuple[ir.ChartParameter, ...]:
         nodes = c.items("parameters", "chart_parameter")
@@ -1243,6 +1267,16 @@ class _Builder:
             ))
         known_ops = [f"op.{o.name}" for o in operands if o.type not in ("axis", "tag")]
         known = known_axis + known_ops
+        master_operand = None
+        for i, o in enumerate(op_nodes):
+            if o.get("role") == "master":
+                if o["type"] != "axis" or master_operand is not None:
+                    self.error(f, (*base, "operands", i, "role"), "only one operand, of type axis, may be the master axis")
+                    continue
+                master_operand = str(o["name"])
+        if master_operand is not None:
+            # the master is any chart with the drive model: its motion variables and states
+            known = known + [f"master.{v}" for v in (*drive.VARIABLES, *AXIS_READ_ONLY)]
 
         check_nodes = node.items("checks", "check")
         self.duplicates(f, (*base, "checks"), check_nodes, "id", "check")
@@ -1281,6 +1315,16 @@ class _Builder:
         done_when = self.expr(f, (*base, "done", "when"), done["when"], known) if "when" in done else None
         done_prov = self.prov(f, (*base, "done"), done)
 
+        process = None
+        if "process" in node:
+            pn = node.child("process", "process")
+            pp = (*base, "process")
+            process = ir.Process(
+                kind=str(pn["kind"]),
+                complete_when=self.expr(f, (*pp, "complete_when"), pn["complete_when"], known) if "complete_when" in pn else None,
+                ends_when=self.expr(f, (*pp, "ends_when"), pn["ends_when"], known) if "ends_when" in pn else None,
+                provenance=self.prov(f, pp, pn),
+            )
         table_id = node["execution_table"]
         table = tables.get(table_id)
         if table is None:
@@ -1297,7 +1341,7 @@ class _Builder:
             status_bits=tuple(sorted((str(k), bool(v)) for k, v in status_bits.items())),
             description=str(node.get("description", "")), provenance=self.prov(f, base, node),
             done_provenance=done_prov,
-            location=self.loc(f, base),
+            location=self.loc(f, base), process=process, master_operand=master_operand,
         )
 
     def tag_type(self, f: _File, node: Node) -> ir.TagType:
@@ -1361,6 +1405,8 @@ class _Builder:
         return ir.ExecutionTable(
             id=node["id"], rows=tuple(rows), on_execute=block("on_execute"), on_error=block("on_error"),
             on_accept=block("on_accept"), on_done=block("on_done"), provenance=self.prov(f, parts, node),
+            on_complete=block("on_complete") if "on_complete" in node else (),
+            on_end=block("on_end") if "on_end" in node else (),
         )
 
 

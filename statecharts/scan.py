@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, cast
 
-from statecharts import ir
+from statecharts import drive, ir
 from statecharts.engine import AxisInstance
 from statecharts.expr import Assignment
 
@@ -89,6 +89,18 @@ class Done:
 
 
 @dataclass(frozen=True, slots=True)
+class ProcessEnded:
+    """Trace record: the process ``tag`` started completed (PC) or ended without completing."""
+
+    tag: str
+    complete: bool
+
+
+def _is_drive_event(axis: AxisInstance, event: str) -> bool:
+    return any(e.name == event and e.kind == "drive" for e in axis.chart.events)
+
+
+@dataclass(frozen=True, slots=True)
 class ScanInputs:
     """What the outside world sets for one scan."""
 
@@ -112,11 +124,15 @@ class ScanRecord:
 class TagInstance:
     """One MOTION_INSTRUCTION tag bound to one instruction call in the program."""
 
-    def __init__(self, name: str, instruction: ir.Instruction, tag_type: ir.TagType, axis: str) -> None:
+    def __init__(
+        self, name: str, instruction: ir.Instruction, tag_type: ir.TagType, axis: str, master: str | None = None,
+    ) -> None:
         self.name = name
         self.instruction = instruction
         self.tag_type = tag_type
         self.axis = axis
+        #: the axis bound to the instruction's master operand (MAG's MasterAxis), if any
+        self.master = master
         self.values: dict[str, object] = {}
         for m in tag_type.members:
             self.values[m.name] = False if m.type == "BOOL" else 0
@@ -174,6 +190,8 @@ class System:
         scan_ms: int = 10,
         coarse_update_ms: int = 10,
         ladder: Ladder | None = None,
+        masters: Mapping[str, str] | None = None,
+        motion: bool = True,
     ) -> None:
         if scan_ms <= 0 or coarse_update_ms <= 0:
             raise ValueError("scan_ms and coarse_update_ms must be positive")
@@ -187,8 +205,17 @@ class System:
         calls = list(program)
         if ladder is not None:
             calls.extend((b.tag, b.mnemonic, b.axis) for b in ladder.bindings if b.axis in self.axes)
+        masters = dict(masters or {})
         for tag, mnemonic, axis in calls:
-            self.tags[tag] = TagInstance(tag, self.variant(mnemonic, axis), spec.tag_type, axis)
+            ins = self.variant(mnemonic, axis)
+            master = masters.get(tag)
+            if ins.master_operand is not None and master not in self.axes:
+                raise ValueError(f"{tag}: {mnemonic} needs its {ins.master_operand} bound to an axis of the system")
+            self.tags[tag] = TagInstance(tag, ins, spec.tag_type, axis, master)
+        #: run the drive model of :mod:`statecharts.drive` (the checker offers its events instead)
+        self.motion = motion
+        #: gearing slave axis -> its master axis, set when a MAG is accepted
+        self.gear_masters: dict[str, str] = {}
         self.scan_ms = scan_ms
         self.coarse_update_ms = coarse_update_ms
         self.scans_per_update = max(1, coarse_update_ms // scan_ms)
@@ -196,7 +223,7 @@ class System:
         self.queue: list[str] = []
         self.held_events: list[EnvironmentEvent] = []
         #: when a list, scans append Executed / Errored / Done records to it
-        self.trace: list[Executed | Errored | Done] | None = None
+        self.trace: list[Executed | Errored | Done | ProcessEnded] | None = None
         self.ladder = ladder
         if ladder is not None:
             ladder.scan_ms = scan_ms
@@ -316,6 +343,9 @@ class System:
         env = self.axes[tag.axis].expression_env()
         for k, v in tag.operands.items():
             env[f"op.{k}"] = v
+        if tag.master is not None:
+            for k, v in self.axes[tag.master].expression_env().items():
+                env["master." + k.removeprefix("axis.")] = v
         return env
 
     def _first_failure(self, tag: TagInstance, stages: tuple[ir.Stage, ...]) -> ir.Check | None:
@@ -348,19 +378,42 @@ class System:
 
     def _coarse_update(self) -> None:
         events, self.held_events = self.held_events, []
+        due = self._drive_events(events)
         for axis in self.axes.values():
             axis.send("tick")
+            # the drive model's outcomes of the time that passed (docs/semantics.md)
+            for name in due.get(axis.name, ()):
+                self._environment(axis, name)
             # what the passing time completed is done before this update's requests
             self._finish_pending(axis.name)
-            for name in [n for n in self.queue if self.tags[n].axis == axis.name]:
-                self.queue.remove(name)
-                tag = self.tags[name]
+            for tag_name in [n for n in self.queue if self.tags[n].axis == axis.name]:
+                self.queue.remove(tag_name)
+                tag = self.tags[tag_name]
                 if tag.values.get("pending"):
                     self._deliver(axis, tag)
             for ev in events:
-                if ev.axis == axis.name:
+                if ev.axis == axis.name and not _is_drive_event(axis, ev.event):
                     self._environment(axis, ev.event)
         self._finish_pending(None)
+
+    def _drive_events(self, held: Sequence[EnvironmentEvent]) -> dict[str, list[str]]:
+        """The drive events of this update per axis: those the drive model computes (when
+        :attr:`motion` is on; gearing masters advance before their slaves, so a slave
+        follows its master's velocity of this update) and those given as inputs, each
+        once, in the order of :data:`statecharts.drive.EVENTS`."""
+        out: dict[str, list[str]] = {}
+        order = sorted(self.axes.values(), key=lambda a: a.name in self.gear_masters)
+        for axis in order:
+            if axis.chart.drive_model is None:
+                continue
+            due = {ev.event for ev in held if ev.axis == axis.name and _is_drive_event(axis, ev.event)}
+            if self.motion:
+                master = self.gear_masters.get(axis.name)
+                mv = self.axes[master].env.get("CommandVelocity") if master is not None else None
+                due.update(drive.advance(axis.env, self.coarse_update_ms / 1000.0,
+                                         float(mv) if isinstance(mv, (int, float)) else None))
+            out[axis.name] = [e for e in drive.EVENTS if e in due]
+        return out
 
     def _deliver(self, axis: AxisInstance, tag: TagInstance) -> None:
         """The axis answers one queued, pending request (step a of the coarse update)."""
@@ -374,6 +427,16 @@ class System:
             for a in request.actions:
                 axis.env[a.target.removeprefix("axis.")] = a.value(env)
             axis.send(request.event)
+        process = tag.instruction.process
+        if process is not None:
+            # a new process of a kind supersedes the axis's older one of that kind
+            for other in self.tags.values():
+                op = other.instruction.process
+                if (other is not tag and other.axis == tag.axis and op is not None and op.kind == process.kind
+                        and other.values.get("pending") and other.values.get("DN")):
+                    self._end_process(other, complete=False)
+            if tag.master is not None:
+                self.gear_masters[tag.axis] = tag.master
         # the axis answers this request before it processes the next one
         self._finish(tag)
 
@@ -390,18 +453,41 @@ class System:
                 self._finish(tag)
 
     def _finish(self, tag: TagInstance) -> None:
-        """DN when the completion condition holds, else ER when an abort holds."""
+        """DN when the completion condition holds, else ER when an abort holds; for an
+        instruction with a process, once DN is set: PC when the process completes, IP
+        cleared when it ends."""
         ins = tag.instruction
         env = self._check_env(tag)
+        if ins.process is not None and tag.values.get("DN"):
+            self._update_process(tag, env)
+            return
         if ins.done_when is None or ins.done_when(env):
             if self.trace is not None:
                 self.trace.append(Done(tag.name))
             tag.run(ins.table.on_done)
+            if ins.process is not None:
+                self._update_process(tag, env)
             return
         for ab in ins.aborts:
             if ab.fails_when(env):
                 self._fail(tag, ab)
                 return
+
+    def _update_process(self, tag: TagInstance, env: Mapping[str, object]) -> None:
+        process = tag.instruction.process
+        assert process is not None
+        if process.complete_when is not None and process.complete_when(env):
+            self._end_process(tag, complete=True)
+        elif process.ends_when is not None and process.ends_when(env):
+            self._end_process(tag, complete=False)
+
+    def _end_process(self, tag: TagInstance, *, complete: bool) -> None:
+        """The process of ``tag`` completes (``on_complete``: PC) or ends (``on_end``)."""
+        if self.trace is not None:
+            self.trace.append(ProcessEnded(tag.name, complete))
+        table = tag.instruction.table
+        tag.run(table.on_complete if complete else table.on_end)
+        tag.values["pending"] = False
 
     # -- observation --------------------------------------------------------------
 

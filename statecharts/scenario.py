@@ -47,6 +47,8 @@ class ProgramEntry:
     operands: tuple[tuple[str, object], ...]
     #: MOTION_INSTRUCTION members set before the first scan (``preset:``)
     preset: tuple[tuple[str, object], ...] = ()
+    #: the axis of the instruction's master operand (MAG's MasterAxis), ``master:``
+    master: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -264,10 +266,19 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             # an axis family without a variant is legal: the instruction errs at run time
             ins = next((v for v in variants if charts[entry["axis"]].id in v.charts), variants[0])
         tag_ins[entry["tag"]] = ins
+        master = entry.get("master")
+        if ins.master_operand is not None and master is None:
+            err(p, f"{ins.mnemonic} needs `master:`, the axis of its {ins.master_operand} operand")
+        elif master is not None and ins.master_operand is None:
+            err((*p, "master"), f"{ins.mnemonic} has no master axis operand")
+        elif master is not None and master not in setup["axes"]:
+            err((*p, "master"), f"unknown axis {master!r}; axes: {', '.join(setup['axes'])}")
+        elif master is not None and master == entry["axis"]:
+            err((*p, "master"), f"the master axis of {entry['tag']!r} is its own axis {master!r}")
         ops = _operands(ins, entry.get("operands", {}), (*p, "operands"), err)
         preset = _preset(spec, entry.get("preset", {}), (*p, "preset"), err)
         program.append(ProgramEntry(entry["tag"], ins.mnemonic, entry["axis"], tuple(sorted(ops.items())),
-                                    tuple(preset.items())))
+                                    tuple(preset.items()), master))
 
     steps: list[Step] = []
     for i, s in enumerate(doc["steps"]):
@@ -288,7 +299,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
                 if e["axis"] not in untyped:
                     err((*p, "events", j, "axis"), f"unknown axis {e['axis']!r}; axes: {', '.join(setup['axes'])}")
                 continue
-            env_events = [ev.name for ev in event_chart.events if ev.kind == "environment"]
+            env_events = [ev.name for ev in event_chart.events if ev.kind in ("environment", "drive")]
             if e["event"] not in env_events:
                 err((*p, "events", j, "event"),
                     f"{e['event']!r} is not an environment event of {event_chart.id}; expected one of: {', '.join(env_events)}")
@@ -487,7 +498,8 @@ def build_system(scenario: Scenario, spec: ir.Spec) -> System:
         for a in scenario.axes
     ]
     system = System(spec, axes, [(p.tag, p.instruction, p.axis) for p in scenario.program],
-                    scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms)
+                    scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms,
+                    masters={p.tag: p.master for p in scenario.program if p.master is not None})
     for p in scenario.program:
         system.tags[p.tag].operands.update(dict(p.operands))
         system.tags[p.tag].values.update(dict(p.preset))

@@ -388,7 +388,7 @@ LOADER_KEYS = {
     # tags and prescan: set-up of a ladder program (statecharts/program/scenario.py)
     "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "program", "tags", "prescan"},
     "/properties/setup/properties/axes/additionalProperties": {"type", "state", "variables"},
-    "/properties/setup/properties/program/oneOf/0/items": {"tag", "instruction", "axis", "operands", "preset"},
+    "/properties/setup/properties/program/oneOf/0/items": {"tag", "instruction", "axis", "master", "operands", "preset"},
     # tags and always: steps of a scenario with a ladder program
     "/properties/steps/items": {"name", "prescan", "scans", "within", "rungs", "operands", "events", "expect", "set",
                                 "tags", "always"},

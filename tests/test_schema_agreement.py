@@ -52,10 +52,11 @@ SCHEMA_NODES: dict[str, tuple[str, ...]] = {
     "abort": ("/properties/instruction/properties/aborts/items",),
     "request": ("/properties/instruction/properties/request",),
     "done": ("/properties/instruction/properties/done",),
+    "process": ("/properties/instruction/properties/process",),
     "execution_table": ("/properties/execution_tables/items",),
     "table_row": ("/properties/execution_tables/items/properties/rows/items",),
     "table_block": tuple(f"/properties/execution_tables/items/properties/{k}"
-                         for k in ("on_execute", "on_error", "on_accept", "on_done")),
+                         for k in ("on_execute", "on_error", "on_accept", "on_done", "on_complete", "on_end")),
     "tag_type": ("/properties/tag_type",),
     "wrong_axis_family": ("/properties/tag_type/properties/wrong_axis_family",),
     "tag_member": ("/properties/tag_type/properties/members/items",),
@@ -174,6 +175,7 @@ IR_RECORDS: dict[str, tuple[type, dict[str, str]]] = {
     "abort": (ir.Check, {**_PROV, "when": "fails_when"}),
     "request": (ir.Request, {}),
     "done": (ir.Instruction, {"when": "done_when", "source": "done_provenance", "interpretation": "done_provenance"}),
+    "process": (ir.Process, _PROV),
     "execution_table": (ir.ExecutionTable, _PROV),
     "table_row": (ir.TableRow, _PROV),
     "tag_type": (ir.TagType, _PROV),
@@ -205,7 +207,8 @@ IR_RECORDS: dict[str, tuple[type, dict[str, str]]] = {
 NOT_IN_IR: dict[tuple[str, str], str] = {
     ("file", k): "a file is a container; its sections become Spec fields" for k in NODE_KEYS["file"]
 } | {
-    ("table_block", "actions"): "become ExecutionTable.on_execute/on_error/on_accept/on_done",
+    ("table_block", "actions"): "become ExecutionTable.on_execute/on_error/on_accept/on_done/on_complete/on_end",
+    ("operand", "role"): "the master operand's name becomes Instruction.master_operand",
     ("table_block", "source"): "the IR keeps no provenance for the four action blocks of a table",
     ("table_block", "interpretation"): "checked to exist, not kept (as source)",
 }

@@ -60,7 +60,9 @@ event = {
     "type": "object", "additionalProperties": False,
     "required": ["name", "kind", "source"],
     "properties": {
-        "name": ID, "kind": {"enum": ["request", "environment", "clock"]},
+        "name": ID, "kind": {"enum": ["request", "environment", "clock", "drive"],
+                             "description": ("drive: an outcome of the drive model (a move reaching its target, "
+                                             "a homing sequence ending), applied right after the coarse update's tick.")},
         "description": {"type": "string"}, "actions": ACTIONS,
         "parameters": {"type": "array", "items": ID},
         "source": SOURCE, "interpretation": INTERP,
@@ -85,6 +87,8 @@ chart = {
         "states": {"type": "array", "items": {"$ref": "#/$defs/state"}, "minItems": 1},
         "initial": ID,
         "transitions": {"type": "array", "items": transition},
+        "drive_model": {"enum": ["motion"],
+                        "description": "The chart carries the motion variables the drive model advances at every coarse update."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -97,6 +101,7 @@ operand = {
         "range": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
         "text_values": {"type": "object", "additionalProperties": {"type": "integer"}},
         "default": SCALAR, "description": {"type": "string"},
+        "role": {"enum": ["master"], "description": "A second axis operand (MAG's master axis), read as master.X."},
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -142,6 +147,13 @@ instruction = {
             "properties": {"when": EXPR, "source": SOURCE, "interpretation": INTERP},
         },
         "status_bits": {"type": "object", "additionalProperties": {"type": "boolean"}},
+        "process": {
+            "type": "object", "additionalProperties": False, "required": ["kind", "source"],
+            "description": ("The process the instruction starts once the axis accepts it: IP until it completes "
+                            "(PC) or ends; a request of the same kind on the axis supersedes it."),
+            "properties": {"kind": ID, "complete_when": EXPR, "ends_when": EXPR,
+                           "source": SOURCE, "interpretation": INTERP},
+        },
         "source": SOURCE, "interpretation": INTERP,
     },
 }
@@ -163,6 +175,7 @@ table = {
                 "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
             }}},
         "on_execute": block, "on_error": block, "on_accept": block, "on_done": block,
+        "on_complete": block, "on_end": block,
     },
 }
 tag_type = {
@@ -352,6 +365,7 @@ scenario = {
                         "required": ["tag", "instruction", "axis"],
                         "properties": {
                             "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
+                            "master": {**NAME_KEY, "description": "The axis of the instruction's master axis operand (MAG's Master Axis)."},
                             "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                             "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
                                        "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
@@ -440,6 +454,8 @@ PROPERTY = {
         "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
         "scope": {"enum": ["axis", "tag"]},
         "chart": ID, "instruction": ID,
+        "systems": {"type": "array", "items": ID, "minItems": 1,
+                    "description": "Check the property only on these systems (by name); default: every system with its chart."},
         "where": EXPR, "holds": EXPR, "goal": EXPR,
         "trigger": EXPR, "response": EXPR, "unless": EXPR,
         "within": {"type": "integer", "minimum": 1, "maximum": 1000},

@@ -72,7 +72,7 @@ def test_the_fixture_gives_the_spec(motionchart_spec):
     assert "AxisNonCIP" in [c.id for c in motionchart_spec.charts]
 
 
-@settings(max_examples=15, database=None)
+@settings(max_examples=15, database=None, deadline=None)
 @given(mst.scenarios(SPEC, CHART, ["MSO", "MSF", "MAFR"]))
 def test_er_always_comes_with_an_error_code(scenario):
     # RM002H: when ER is set, ERR holds the error code (never 0)

@@ -415,7 +415,7 @@ def scenario_document(model: ProgramModel, system: ProgramSystem, graph: Graph, 
         "format": "motionchart-scenario/1",
         "name": f"{system.name}: {verdict.prop.name} ({verdict.prop.kind}) {'witness' if verdict.witness else 'violated'}",
         "description": f"{verdict.message}. Start: {start.label}.",
-        "sources": [f"motionchart check of {system.file}"],
+        "sources": [f"MC {system.file} (motionchart check)"],
         "setup": {"program": prog, "axes": axes, **({"tags": dict(start.tags)} if start.tags else {})},
         "steps": [],
     }

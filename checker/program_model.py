@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from checker.compile import FastAxis
+from checker.core import Intern
 from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError
 from statecharts.engine import AxisInstance
@@ -111,24 +112,6 @@ class Coverage:
     motion_executed: set[tuple[int, str]] = field(default_factory=set)  # (binding, axis state)
     errors: set[tuple[int, int, int, str]] = field(default_factory=set)  # (binding, ERR, EXERR, check)
     done: set[int] = field(default_factory=set)  # bindings that completed with DN
-
-
-class Intern:
-    """Values <-> dense small integers."""
-
-    __slots__ = ("index", "values")
-
-    def __init__(self) -> None:
-        self.index: dict[Any, int] = {}
-        self.values: list[Any] = []
-
-    def id(self, value: Any) -> int:
-        i = self.index.get(value)
-        if i is None:
-            i = len(self.values)
-            self.index[value] = i
-            self.values.append(value)
-        return i
 
 
 def _error(program: Program, ins: Instruction | None, rung: int | None, message: str) -> Diagnostic:

@@ -214,7 +214,8 @@ class CompiledModel:
         self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
         # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered)
         self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
-            tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...]]]] = [{} for _ in model.axes]
+            tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...],
+            tuple[tuple[str, int], ...]]]] = [{} for _ in model.axes]
         self._tail_memo: list[dict[tuple[object, ...], tuple[int, tuple[int, ...], list[Property], list[Property]]]] = [
             {} for _ in model.axes]
         self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
@@ -225,6 +226,10 @@ class CompiledModel:
         self._watch_memo: list[dict[tuple[tuple[int, ...], int], tuple[tuple[int, ...], tuple[Property, ...],
                                                                   tuple[Property, ...]]]] = [{} for _ in model.axes]
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
+        #: per axis: the base scan up to the deliveries (axis core, tags, events, tags
+        #: scanned, tags watched) -> the moves of the environment events at the end of the choices
+        self._event_moves: list[dict[tuple[object, ...], Moves | tuple[tuple[int, tuple[int, ...], list[Property], list[Property]], ...]]] = [
+            {} for _ in model.axes]
         self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
         self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
@@ -978,9 +983,13 @@ class CompiledModel:
         ckey = (q, tags)
         cc = self._ctx_memo[ai].get(ckey)
         if cc is None:
-            cc = (*self.context(ai, state), tuple(self.local_choices(ai, state)))
+            chs = tuple(self.local_choices(ai, state))
+            esplit = len(chs)
+            while esplit > 0 and chs[esplit - 1][1] == EVENT and chs[esplit - 1][3] not in self._drive[ai]:
+                esplit -= 1
+            cc = (*self.context(ai, state), chs, self._drive_firsts(ai, chs), esplit)
             self._ctx_memo[ai][ckey] = cc
-        active, watch, choices = cc
+        active, watch, choices, firsts, esplit = cc
         cur = self.current
         self.where = (cur, self.nothing_index)
         # the base (no input); an event choice shares its steps 1 to 3 up to the
@@ -1000,7 +1009,29 @@ class CompiledModel:
         out = []
         evmemo = self._event[ai]
         drive_events = self._drive[ai]
-        for c, kind, k, arg in choices:
+        idle: frozenset[str] | tuple[()] = ()
+        if coarse and firsts:
+            idle = self._idle_drive(ai, aid, firsts, cur)
+        # the environment events at the end of the choices: at a coarse update their
+        # moves are a function of the base scan up to the deliveries, memoised by it
+        ekey: tuple[object, ...] | None = None
+        if coarse and esplit < len(choices):
+            ekey = (core_m, tuple(mid), events, order, w)
+            hit = self._event_moves[ai].get(ekey)
+            if hit is not None:
+                choices = choices[:esplit]
+        n_out = 0
+        for i, (c, kind, k, arg) in enumerate(choices):
+            if i == esplit:
+                n_out = len(out)
+            if idle:
+                # a drive event that leaves the ticked core as it is: the choice's scan
+                # is its base choice's (or the nothing choice's), which comes earlier
+                if kind >= WITH_DRIVE:
+                    if cast("tuple[object, str]", arg)[1] in idle:
+                        continue
+                elif kind == EVENT and arg in idle:
+                    continue
             self.where = (cur, c)
             # a drive event acts right after the tick, before the deliveries: no shortcut
             if kind == EVENT and arg not in drive_events:
@@ -1027,6 +1058,14 @@ class CompiledModel:
             if blk == base_blk and not bad and not good:
                 continue
             out.append((c, blk, bad, good))
+        if ekey is not None:
+            if hit is None:
+                memo = self._event_moves[ai]
+                if len(memo) > 200_000:  # bounded: a cache, not state
+                    memo.clear()
+                memo[ekey] = tuple(out[n_out:]) if len(choices) > esplit else ()
+            else:
+                out.extend(hit)
         if key is not None:
             self._remember(ai, key, (base, out))
             leader = self._leader[ai]
@@ -1036,6 +1075,48 @@ class CompiledModel:
             else:
                 self._block_memo[ai][key] = (base, out)
         return base, out
+
+    def _drive_core(self, ai: int, core: int, events: tuple[str, ...]) -> int:
+        """The drive events among ``events`` applied to the ticked core ``core``, in the
+        order the scan applies them (as :meth:`_prefix` does)."""
+        memo = self._event[ai]
+        for ev in self._drive[ai]:
+            if ev in events:
+                e = memo.get((core, ev))
+                core = e if e is not None else self.piece_event(ai, core, ev)
+        return core
+
+    def _drive_firsts(self, ai: int, choices: tuple[tuple[int, int, int, object], ...]) -> tuple[tuple[str, int], ...]:
+        """(drive event, the first of ``choices`` that gives it) for each drive event offered."""
+        out: list[tuple[str, int]] = []
+        for d in self._drive[ai]:
+            for c, kind, _k, arg in choices:
+                if (kind >= WITH_DRIVE and cast("tuple[object, str]", arg)[1] == d) or (kind == EVENT and arg == d):
+                    out.append((d, c))
+                    break
+        return tuple(out)
+
+    def _idle_drive(self, ai: int, aid: int, firsts: tuple[tuple[str, int], ...], cur: int) -> frozenset[str]:
+        """The drive events that change nothing in this coarse-update scan of axis part
+        ``aid``: applied after the tick (with the held ones), they leave the core as the
+        held ones alone leave it, so every choice that adds one scans as its base choice
+        (or as the nothing choice), which comes earlier.  ``firsts`` pairs each offered
+        drive event with the first choice that gives it; pieces computed here are
+        credited to that choice, as the scan of that choice would credit them."""
+        core, _q, h = self._split[aid]
+        t = self._tick[ai].get(core)
+        if t is None:
+            t = self.piece_tick(ai, core)
+        base = self._drive_core(ai, t, h)
+        out: set[str] = set()
+        for d, first in firsts:
+            if d in h:
+                out.add(d)
+                continue
+            self.where = (cur, first)
+            if self._drive_core(ai, t, (*h, d)) == base:
+                out.add(d)
+        return frozenset(out)
 
     def _remember(self, ai: int, key: tuple[object, ...], value: tuple[BlockStep, Moves]) -> None:
         memo = self._own_memo[ai]

@@ -216,8 +216,8 @@ class CompiledModel:
         self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
             tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...],
             tuple[tuple[str, int], ...]]]] = [{} for _ in model.axes]
-        self._tail_memo: list[dict[tuple[object, ...], tuple[int, tuple[int, ...], list[Property], list[Property]]]] = [
-            {} for _ in model.axes]
+        self._tail_memo: list[dict[tuple[object, ...], dict[int, tuple[
+            int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]]] = [{} for _ in model.axes]
         self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
         self._finish_by_view: list[dict[tuple[int, tuple[object, ...]], int]] = [{} for _ in model.slots]
         self._exec_proj: list[Callable[[int], tuple[object, ...]] | None] = [None] * len(model.slots)
@@ -732,28 +732,45 @@ class CompiledModel:
         core, q, h, events, order, watch = self._prefix(ai, aid, tags, mode, kind, k, arg, active, watch)
         if mode == COARSE:
             core = self._apply_events(ai, core, events)
-            a2, t2, bad, good = self._tail(ai, tags, core, order, watch)
+            a2, t2, bad, good, _blk = self._tail(ai, tags, core, order, watch)
             tags[:] = t2
             return a2, tags, list(bad), list(good)
         return self._post(ai, tags, core, q, h, order, watch)
 
     def _tail(self, ai: int, mid: list[int], core: int, order: tuple[int, ...], watch: tuple[int, ...]
-              ) -> tuple[int, tuple[int, ...], list[Property], list[Property]]:
+              ) -> tuple[int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]:
         """The end of a coarse-update scan once its events are applied: the pending
         instructions finished, then step 4 (the queue and held events are empty by
-        then).  Memoised by (axis core, tag parts, tags scanned, tags watched): the
-        scans of many states and choices end alike.  ``mid`` is not changed."""
-        key = (core, tuple(mid), order, watch)
-        memo = self._tail_memo[ai]
-        r = memo.get(key)
+        then).  Memoised by (tag parts, tags scanned, tags watched), then by axis core:
+        the scans of many states and choices end alike.  ``mid`` is not changed.
+        Returns (axis part, tag parts, violated, reached, the block: axis part then tag parts)."""
+        inner = self._tail_inner(ai, tuple(mid), order, watch)
+        r = inner.get(core)
         if r is None:
-            t = list(mid)
-            self._finish_all(ai, t, core, order)
-            a2, t2, bad, good = self._post(ai, t, core, (), (), order, watch)
-            r = (a2, tuple(t2), bad, good)
-            if len(memo) > 1_000_000:  # bounded: a cache, not state
+            r = self._tail_compute(ai, mid, core, order, watch, inner)
+        return r
+
+    def _tail_inner(self, ai: int, mid: tuple[int, ...], order: tuple[int, ...], watch: tuple[int, ...]
+                    ) -> dict[int, tuple[int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]:
+        """The memo of :meth:`_tail` for these tag parts, by axis core."""
+        memo = self._tail_memo[ai]
+        key = (mid, order, watch)
+        inner = memo.get(key)
+        if inner is None:
+            if len(memo) > 300_000:  # bounded: a cache, not state
                 memo.clear()
-            memo[key] = r
+            inner = memo[key] = {}
+        return inner
+
+    def _tail_compute(self, ai: int, mid: list[int] | tuple[int, ...], core: int, order: tuple[int, ...],
+                      watch: tuple[int, ...],
+                      inner: dict[int, tuple[int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]
+                      ) -> tuple[int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]:
+        t = list(mid)
+        self._finish_all(ai, t, core, order)
+        a2, t2, bad, good = self._post(ai, t, core, (), (), order, watch)
+        r = (a2, tuple(t2), bad, good, (a2, *t2))
+        inner[core] = r
         return r
 
     def _prefix(self, ai: int, aid: int, tags: list[int], mode: int, kind: int, k: int, arg: object,
@@ -1000,11 +1017,18 @@ class CompiledModel:
         t2: Sequence[int]
         if coarse:
             core_b = self._apply_events(ai, core_m, events) if events else core_m
-            a2, t2, bad, good = self._tail(ai, mid, core_b, order, w)
+            mid_t = tuple(mid)
+            inner = self._tail_inner(ai, mid_t, order, w)
+            rt = inner.get(core_b)
+            if rt is None:
+                rt = self._tail_compute(ai, mid_t, core_b, order, w, inner)
+            base_blk = rt[4]
+            bad = rt[2]
+            good = rt[3]
         else:
             core_b = core_m
             a2, t2, bad, good = self._post(ai, list(mid), core_b, q_m, h_m, order, w)
-        base_blk = (a2, *t2)
+            base_blk = (a2, *t2)
         base = (base_blk, bad, good)
         out = []
         evmemo = self._event[ai]
@@ -1015,15 +1039,14 @@ class CompiledModel:
         # the environment events at the end of the choices: at a coarse update their
         # moves are a function of the base scan up to the deliveries, memoised by it
         ekey: tuple[object, ...] | None = None
+        suffix = ()
         if coarse and esplit < len(choices):
-            ekey = (core_m, tuple(mid), events, order, w)
+            ekey = (core_m, mid_t, events, order, w)
             hit = self._event_moves[ai].get(ekey)
-            if hit is not None:
-                choices = choices[:esplit]
-        n_out = 0
-        for i, (c, kind, k, arg) in enumerate(choices):
-            if i == esplit:
-                n_out = len(out)
+            if hit is None:
+                suffix = choices[esplit:]
+            choices = choices[:esplit]
+        for c, kind, k, arg in choices:
             if idle:
                 # a drive event that leaves the ticked core as it is: the choice's scan
                 # is its base choice's (or the nothing choice's), which comes earlier
@@ -1044,7 +1067,13 @@ class CompiledModel:
                         core_e = e if e is not None else self.piece_event(ai, core_m, arg)
                     if core_e == core_b:
                         continue  # the same scan as the base's
-                    a2, t2, bad, good = self._tail(ai, mid, core_e, order, w)
+                    r = inner.get(core_e)
+                    if r is None:
+                        r = self._tail_compute(ai, mid_t, core_e, order, w, inner)
+                    if r[4] == base_blk and not r[2] and not r[3]:
+                        continue
+                    out.append((c, r[4], r[2], r[3]))
+                    continue
                 else:
                     # the event is held: only the axis part's held events differ
                     h_e = (*h_m, arg)
@@ -1060,10 +1089,27 @@ class CompiledModel:
             out.append((c, blk, bad, good))
         if ekey is not None:
             if hit is None:
+                n_out = len(out)
+                for c, _kind, _k, arg in suffix:
+                    self.where = (cur, c)
+                    assert type(arg) is str  # an EVENT choice's argument is its event name
+                    if events:
+                        core_e = self._apply_events(ai, core_m, (*events, arg))
+                    else:
+                        e = evmemo.get((core_m, arg))
+                        core_e = e if e is not None else self.piece_event(ai, core_m, arg)
+                    if core_e == core_b:
+                        continue  # the same scan as the base's
+                    r = inner.get(core_e)
+                    if r is None:
+                        r = self._tail_compute(ai, mid_t, core_e, order, w, inner)
+                    if r[4] == base_blk and not r[2] and not r[3]:
+                        continue
+                    out.append((c, r[4], r[2], r[3]))
                 memo = self._event_moves[ai]
                 if len(memo) > 200_000:  # bounded: a cache, not state
                     memo.clear()
-                memo[ekey] = tuple(out[n_out:]) if len(choices) > esplit else ()
+                memo[ekey] = tuple(out[n_out:])
             else:
                 out.extend(hit)
         if key is not None:

@@ -85,6 +85,8 @@ State = tuple[int, ...]
 BlockStep = tuple[tuple[int, ...], list["Property"], list["Property"]]
 #: the moves of a block's own choices: (choice, block, violated, reached)
 Moves = list[tuple[int, tuple[int, ...], list["Property"], list["Property"]]]
+#: the moves of the environment events at the end of a block's choices (kept in a memo)
+EventMoves = tuple[tuple[int, tuple[int, ...], list["Property"], list["Property"]], ...]
 _NONE: tuple[Property, ...] = ()
 
 
@@ -215,7 +217,7 @@ class CompiledModel:
         # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered)
         self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
             tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...],
-            tuple[tuple[str, int], ...]]]] = [{} for _ in model.axes]
+            tuple[tuple[str, int], ...], int]]] = [{} for _ in model.axes]
         self._tail_memo: list[dict[tuple[object, ...], dict[int, tuple[
             int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]]] = [{} for _ in model.axes]
         self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
@@ -228,8 +230,7 @@ class CompiledModel:
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
         #: per axis: the base scan up to the deliveries (axis core, tags, events, tags
         #: scanned, tags watched) -> the moves of the environment events at the end of the choices
-        self._event_moves: list[dict[tuple[object, ...], Moves | tuple[tuple[int, tuple[int, ...], list[Property], list[Property]], ...]]] = [
-            {} for _ in model.axes]
+        self._event_moves: list[dict[tuple[object, ...], EventMoves]] = [{} for _ in model.axes]
         self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
         self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
@@ -1039,7 +1040,8 @@ class CompiledModel:
         # the environment events at the end of the choices: at a coarse update their
         # moves are a function of the base scan up to the deliveries, memoised by it
         ekey: tuple[object, ...] | None = None
-        suffix = ()
+        hit: EventMoves | None = None
+        suffix: tuple[tuple[int, int, int, object], ...] = ()
         if coarse and esplit < len(choices):
             ekey = (core_m, mid_t, events, order, w)
             hit = self._event_moves[ai].get(ekey)
@@ -1067,12 +1069,12 @@ class CompiledModel:
                         core_e = e if e is not None else self.piece_event(ai, core_m, arg)
                     if core_e == core_b:
                         continue  # the same scan as the base's
-                    r = inner.get(core_e)
-                    if r is None:
-                        r = self._tail_compute(ai, mid_t, core_e, order, w, inner)
-                    if r[4] == base_blk and not r[2] and not r[3]:
+                    te = inner.get(core_e)
+                    if te is None:
+                        te = self._tail_compute(ai, mid_t, core_e, order, w, inner)
+                    if te[4] == base_blk and not te[2] and not te[3]:
                         continue
-                    out.append((c, r[4], r[2], r[3]))
+                    out.append((c, te[4], te[2], te[3]))
                     continue
                 else:
                     # the event is held: only the axis part's held events differ
@@ -1090,7 +1092,7 @@ class CompiledModel:
         if ekey is not None:
             if hit is None:
                 n_out = len(out)
-                for c, _kind, _k, arg in suffix:
+                for c, _kind, _j, arg in suffix:
                     self.where = (cur, c)
                     assert type(arg) is str  # an EVENT choice's argument is its event name
                     if events:
@@ -1100,12 +1102,12 @@ class CompiledModel:
                         core_e = e if e is not None else self.piece_event(ai, core_m, arg)
                     if core_e == core_b:
                         continue  # the same scan as the base's
-                    r = inner.get(core_e)
-                    if r is None:
-                        r = self._tail_compute(ai, mid_t, core_e, order, w, inner)
-                    if r[4] == base_blk and not r[2] and not r[3]:
+                    te = inner.get(core_e)
+                    if te is None:
+                        te = self._tail_compute(ai, mid_t, core_e, order, w, inner)
+                    if te[4] == base_blk and not te[2] and not te[3]:
                         continue
-                    out.append((c, r[4], r[2], r[3]))
+                    out.append((c, te[4], te[2], te[3]))
                 memo = self._event_moves[ai]
                 if len(memo) > 200_000:  # bounded: a cache, not state
                     memo.clear()

@@ -217,7 +217,7 @@ class CompiledModel:
         # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered)
         self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
             tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...],
-            tuple[tuple[str, int], ...], int]]] = [{} for _ in model.axes]
+            tuple[tuple[str, int, frozenset[int]], ...], int]]] = [{} for _ in model.axes]
         self._tail_memo: list[dict[tuple[object, ...], dict[int, tuple[
             int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]]] = [{} for _ in model.axes]
         self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
@@ -228,6 +228,12 @@ class CompiledModel:
         self._watch_memo: list[dict[tuple[tuple[int, ...], int], tuple[tuple[int, ...], tuple[Property, ...],
                                                                   tuple[Property, ...]]]] = [{} for _ in model.axes]
         self._quiet: list[dict[int, bool]] = [{} for _ in model.slots]
+        #: per tag: (tag part, queued, axis core) -> its part after a prescan pass (prescan_block)
+        self._prescan_tag: list[dict[tuple[int, bool, int], tuple[int, tuple[Property, ...], tuple[Property, ...]]
+                                     | tuple[()]]] = [{} for _ in model.slots]
+        #: per axis: axis part -> (axis part, violated, reached) after a prescan pass
+        self._prescan_axis: list[dict[int, tuple[int, tuple[Property, ...], tuple[Property, ...]]]] = [
+            {} for _ in model.axes]
         #: per axis: the base scan up to the deliveries (axis core, tags, events, tags
         #: scanned, tags watched) -> the moves of the environment events at the end of the choices
         self._event_moves: list[dict[tuple[object, ...], EventMoves]] = [{} for _ in model.axes]
@@ -738,6 +744,64 @@ class CompiledModel:
             return a2, tags, list(bad), list(good)
         return self._post(ai, tags, core, q, h, order, watch)
 
+    def prescan_block(self, ai: int, aid: int, tags: Sequence[int]) -> tuple[int, list[int], list[Property], list[Property]]:
+        """A prescan pass of axis ``ai``'s block (axis part ``aid``, tag parts ``tags``):
+        the same as :meth:`_block` in mode PRESCAN, composed per tag.  A prescan pass
+        runs no coarse update and leaves the axis core alone, so each tag's part after
+        it is a function of its own part, whether it is queued and the core (its prescan
+        row, then its properties and abstraction), and the axis part is a function of
+        the axis part; if a tag's prescan row executes, the whole block is scanned by
+        :meth:`_block` (an accepted request changes the queue)."""
+        core, q, h = self._split[aid]
+        tis = self.tis[ai]
+        memo = self._prescan_tag
+        out: list[int] = []
+        bad: list[Property] = []
+        good: list[Property] = []
+        for j, tid in enumerate(tags):
+            ti = tis[j]
+            key = (tid, j in q, core)
+            p = memo[ti].get(key)
+            if p is None:
+                p = self._prescan_piece(ti, ai, tid, key[1], core)
+            if not p:
+                return self._block(ai, aid, list(tags), PRESCAN, NOTHING, 0, None)
+            out.append(p[0])
+            if p[1]:
+                bad.extend(p[1])
+            if p[2]:
+                good.extend(p[2])
+        pa = self._prescan_axis[ai].get(aid)
+        if pa is None:
+            ap = self._axis_post[ai].get(core)
+            if ap is None:
+                ap = self.piece_axis_post(ai, core)
+            pa = self._prescan_axis[ai][aid] = (self.join(ai, ap[0], q, h), ap[1], ap[2])
+        if pa[1]:
+            bad.extend(pa[1])
+        if pa[2]:
+            good.extend(pa[2])
+        return pa[0], out, bad, good
+
+    def _prescan_piece(self, ti: int, ai: int, tid: int, queued: bool, core: int
+                       ) -> tuple[int, tuple[Property, ...], tuple[Property, ...]] | tuple[()]:
+        """Tag ``ti``'s part after a prescan pass (its prescan row, then :meth:`piece_tag_post`),
+        or ``()`` when the row executes."""
+        rr = self._rows[ti].get(tid * 3 + 2)
+        if rr is None:
+            rr = self.piece_row(ti, tid, 2)
+        r: tuple[int, tuple[Property, ...], tuple[Property, ...]] | tuple[()] = ()
+        if not rr[1]:
+            tid2 = rr[0]
+            view = -1
+            if self._reads_axis[ti]:
+                v = self._view[ti].get(core)
+                view = v if v is not None else self.view(ti, ai, core)
+            p = self._tag_post[ti].get((tid2, queued, view))
+            r = p if p is not None else self.piece_tag_post(ti, ai, tid2, queued, view)
+        self._prescan_tag[ti][(tid, queued, core)] = r
+        return r
+
     def _tail(self, ai: int, mid: list[int], core: int, order: tuple[int, ...], watch: tuple[int, ...]
               ) -> tuple[int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]:
         """The end of a coarse-update scan once its events are applied: the pending
@@ -1034,7 +1098,7 @@ class CompiledModel:
         out = []
         evmemo = self._event[ai]
         drive_events = self._drive[ai]
-        idle: frozenset[str] | tuple[()] = ()
+        idle: frozenset[int] = frozenset()
         if coarse and firsts:
             idle = self._idle_drive(ai, aid, firsts, cur)
         # the environment events at the end of the choices: at a coarse update their
@@ -1049,14 +1113,10 @@ class CompiledModel:
                 suffix = choices[esplit:]
             choices = choices[:esplit]
         for c, kind, k, arg in choices:
-            if idle:
+            if idle and c in idle:
                 # a drive event that leaves the ticked core as it is: the choice's scan
                 # is its base choice's (or the nothing choice's), which comes earlier
-                if kind >= WITH_DRIVE:
-                    if cast("tuple[object, str]", arg)[1] in idle:
-                        continue
-                elif kind == EVENT and arg in idle:
-                    continue
+                continue
             self.where = (cur, c)
             # a drive event acts right after the tick, before the deliveries: no shortcut
             if kind == EVENT and arg not in drive_events:
@@ -1134,37 +1194,39 @@ class CompiledModel:
                 core = e if e is not None else self.piece_event(ai, core, ev)
         return core
 
-    def _drive_firsts(self, ai: int, choices: tuple[tuple[int, int, int, object], ...]) -> tuple[tuple[str, int], ...]:
-        """(drive event, the first of ``choices`` that gives it) for each drive event offered."""
-        out: list[tuple[str, int]] = []
+    def _drive_firsts(self, ai: int, choices: tuple[tuple[int, int, int, object], ...]
+                      ) -> tuple[tuple[str, int, frozenset[int]], ...]:
+        """(drive event, the first of ``choices`` that gives it, every choice that gives
+        it) for each drive event offered."""
+        out: list[tuple[str, int, frozenset[int]]] = []
         for d in self._drive[ai]:
-            for c, kind, _k, arg in choices:
-                if (kind >= WITH_DRIVE and cast("tuple[object, str]", arg)[1] == d) or (kind == EVENT and arg == d):
-                    out.append((d, c))
-                    break
+            with_d = [c for c, kind, _k, arg in choices
+                      if (kind >= WITH_DRIVE and cast("tuple[object, str]", arg)[1] == d) or (kind == EVENT and arg == d)]
+            if with_d:
+                out.append((d, with_d[0], frozenset(with_d)))
         return tuple(out)
 
-    def _idle_drive(self, ai: int, aid: int, firsts: tuple[tuple[str, int], ...], cur: int) -> frozenset[str]:
-        """The drive events that change nothing in this coarse-update scan of axis part
-        ``aid``: applied after the tick (with the held ones), they leave the core as the
-        held ones alone leave it, so every choice that adds one scans as its base choice
-        (or as the nothing choice), which comes earlier.  ``firsts`` pairs each offered
-        drive event with the first choice that gives it; pieces computed here are
-        credited to that choice, as the scan of that choice would credit them."""
+    def _idle_drive(self, ai: int, aid: int, firsts: tuple[tuple[str, int, frozenset[int]], ...], cur: int
+                    ) -> frozenset[int]:
+        """The choices whose drive event changes nothing in this coarse-update scan of
+        axis part ``aid``: applied after the tick (with the held ones), the event leaves
+        the core as the held ones alone leave it, so each such choice scans as its base
+        choice (or as the nothing choice), which comes earlier.  ``firsts`` pairs each
+        offered drive event with the first choice that gives it and all that give it;
+        pieces computed here are credited to that first choice, as its scan would."""
         core, _q, h = self._split[aid]
         t = self._tick[ai].get(core)
         if t is None:
             t = self.piece_tick(ai, core)
         base = self._drive_core(ai, t, h)
-        out: set[str] = set()
-        for d, first in firsts:
-            if d in h:
-                out.add(d)
-                continue
-            self.where = (cur, first)
-            if self._drive_core(ai, t, (*h, d)) == base:
-                out.add(d)
-        return frozenset(out)
+        out: frozenset[int] = frozenset()
+        for d, first, with_d in firsts:
+            if d not in h:
+                self.where = (cur, first)
+                if self._drive_core(ai, t, (*h, d)) != base:
+                    continue
+            out = out | with_d
+        return out
 
     def _remember(self, ai: int, key: tuple[object, ...], value: tuple[BlockStep, Moves]) -> None:
         memo = self._own_memo[ai]
@@ -1195,7 +1257,7 @@ class CompiledModel:
             if self.has_prescan and not self._busy[state[1]]:
                 self.where = (self.current, self.prescan_index)
                 n = self.block_len[0]
-                a2, t2, pb, pg = self._block(0, state[1], list(state[2:1 + n]), PRESCAN, NOTHING, 0, None)
+                a2, t2, pb, pg = self.prescan_block(0, state[1], state[2:1 + n])
                 out1.append((self.prescan_index, (nphase, a2, *t2), pb, pg))
             return out1
         busy = False
@@ -1260,7 +1322,7 @@ class CompiledModel:
             for ai in range(naxes):
                 start = self.block_start[ai]
                 n = self.block_len[ai]
-                a2, t2, pb, pg = self._block(ai, state[start], list(state[start + 1:start + n]), PRESCAN, NOTHING, 0, None)
+                a2, t2, pb, pg = self.prescan_block(ai, state[start], state[start + 1:start + n])
                 v.append(a2)
                 v.extend(t2)
                 p_bad.extend(pb)

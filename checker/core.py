@@ -1143,6 +1143,17 @@ class CompiledModel:
                     a2 = self._join[ai].get((ap_core, q_m, h_e)) or self.join(ai, ap_core, q_m, h_e)
                     out.append((c, (a2, *base_blk[1:]), base[1], base[2]))
                     continue
+            elif coarse:
+                # the end of the scan comes from the tail memo with its block
+                tl = list(tags)
+                mc, _q, _h, evs, order_c, watch_c = self._prefix(ai, aid, tl, mode, kind, k, arg, active, watch)
+                if evs:
+                    mc = self._apply_events(ai, mc, evs)
+                te = self._tail(ai, tl, mc, order_c, watch_c)
+                if te[4] == base_blk and not te[2] and not te[3]:
+                    continue
+                out.append((c, te[4], te[2], te[3]))
+                continue
             else:
                 a2, t2, bad, good = self._block(ai, aid, list(tags), mode, kind, k, arg, active, watch)
             blk = (a2, *t2)

@@ -461,6 +461,32 @@ def explore(
     least depth that covered it (:attr:`Coverage.first`; :func:`witness_run` gives the
     run to it)."""
     start = time.perf_counter()
+    # the search allocates millions of small acyclic objects (tuples, bytes) and keeps
+    # most of them: the cyclic collector would walk the growing heap again and again
+    # for nothing (about a fifth of the time), so it is off while the search runs
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        return _explore(model, start, max_states=max_states, max_seconds=max_seconds, keep_graph=keep_graph,
+                        progress=progress, on_progress=on_progress, stop_on_violation=stop_on_violation,
+                        witnesses=witnesses)
+    finally:
+        if collecting:
+            gc.enable()
+
+
+def _explore(
+    model: Model,
+    start: float,
+    *,
+    max_states: int | None,
+    max_seconds: float | None,
+    keep_graph: bool,
+    progress: bool | None,
+    on_progress: Callable[[int, int, float], None] | None,
+    stop_on_violation: bool,
+    witnesses: bool,
+) -> SearchResult:
     core = CompiledModel(model)
     codec = CoreCodec(core)
     pack = codec.pack
@@ -531,11 +557,6 @@ def explore(
     stop_reason: str | None = None
     i = 0
     successors = core.successors
-    # the search allocates millions of small acyclic objects (tuples, bytes) and keeps
-    # most of them: the cyclic collector would walk the growing heap again and again
-    # for nothing (about a fifth of the time), so it is off while the search runs
-    collecting = gc.isenabled()
-    gc.disable()
     try:
         while i < len(encoded):
             if i % CHECK_EVERY == 0:
@@ -595,8 +616,6 @@ def explore(
     except _Stop:
         pass
     finally:
-        if collecting:
-            gc.enable()
         if bar is not None:
             bar.stop()
     seconds = time.perf_counter() - start

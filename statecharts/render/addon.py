@@ -147,7 +147,7 @@ def recovery_chart(spec: ir.Spec, a: ir.AddOnInstruction, *, ordered: bool = Fal
            for s in rec.states if s.call is not None]
     events = tuple(ir.Event(e, "environment", d, (), (), p) for e, d, p in (
         ("rung_true", "the rung goes true", a.execution.provenance), ("rung_false", "the rung goes false", rf.provenance)))
-    return ir.Chart(a.id + RECOVERY_SUFFIX, f"{a.id} recovery chart", ir.ChartKind.HANDLER, "", (), (), events,
+    return ir.Chart(a.id + RECOVERY_SUFFIX, f"Recovery chart of {a.id}", ir.ChartKind.HANDLER, "", (), (), events,
                     tuple(states), tuple(ts), IDLE, rec.description, rec.provenance, rec.location)
 
 

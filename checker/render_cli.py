@@ -8,17 +8,13 @@ returns its exit code (``None`` for a command that is not one of these).
   [--part NAME] [--spec PATH]``: a chart's state diagram, or, for an instruction mnemonic (``MSO``), its
   flowchart (``--part overview`` or a composite state's id for a large chart, ``part1`` ... for a long
   flowchart);
-  for an add-on instruction (``spec/addons/``), ``<ID>`` draws its flowchart and
-  ``<ID>_recovery`` its recovery chart.
+  for an add-on instruction, ``<ID>`` draws its flowchart and ``<ID>_recovery`` its
+  recovery chart.
   The format defaults to the output file's suffix (``.dot``/``.gv``, ``.svg``, ``.png``,
   ``.mmd``), else ``dot``.  Without ``-o`` the text goes to standard output; PNG needs
   ``-o``.
 * ``motionchart docs -o DIR [--scenarios DIR] [--spec PATH]``: the Markdown reference
   with its diagrams.
-
-The add-on instructions documented with a spec are those of the bundled spec (no
-``--spec``) or of each ``--spec`` directory that has ``addons/`` or
-``instructions/motion/`` (:func:`statecharts.render.aoi.aoi_spec_dirs`).
 * ``motionchart generate [-o DIR] [--check] [--scenarios DIR] [--spec PATH]``: every
   artefact into ``generated/``; ``--check`` regenerates into a temporary directory,
   lists what differs and exits 1 (fix: ``make generate``).
@@ -167,12 +163,13 @@ def _diagram(args: argparse.Namespace, prog: str) -> int:
     try:
         target = resolve(spec, args.chart)
     except UnknownTarget as exc:
-        return _aoi_diagram(args, prog, fmt, str(exc))
+        return _fail(prog, str(exc), EXIT_USAGE)
     from statecharts.render.dot import DEFAULT_LABELS
     from statecharts.render.flowchart import flowchart_part_names
     from statecharts.render.views import view_names
 
-    labels = args.labels or DEFAULT_LABELS
+    recovery = isinstance(target, ir.Chart) and target.id not in {c.id for c in spec.charts}
+    labels = args.labels or ("full" if recovery else DEFAULT_LABELS)  # an add-on's recovery: draw its calls
     part = args.part
     names = view_names(target) if isinstance(target, ir.Chart) else flowchart_part_names(spec, target)
     if isinstance(target, ir.Chart):
@@ -190,26 +187,6 @@ def _diagram(args: argparse.Namespace, prog: str) -> int:
     else:
         text = (instruction_mermaid(spec, target) if fmt == "mermaid"
                 else instruction_dot(spec, target, labels=labels, part=part))
-    return _emit(args, prog, fmt, text)
-
-
-def _aoi_diagram(args: argparse.Namespace, prog: str, fmt: str, unknown: str) -> int:
-    """``diagram`` for a name that is no chart or instruction: an add-on instruction's diagram."""
-    from statecharts.render import aoi
-
-    names = aoi.diagram_names(aoi.load_aoi_documents(args.spec))
-    found = names.get(args.chart)
-    if found is None:
-        folded = [n for n in names if n.casefold() == args.chart.casefold()]
-        found = names[folded[0]] if len(folded) == 1 else None
-    if found is None:
-        listed = ", ".join(names) or "(none)"
-        return _fail(prog, f"{unknown}; add-on instructions: {listed}", EXIT_USAGE)
-    doc, kind = found
-    if kind == "flowchart":
-        text = aoi.aoi_flowchart_mermaid(doc) if fmt == "mermaid" else aoi.aoi_flowchart_dot(doc)
-    else:
-        text = aoi.recovery_mermaid(doc) if fmt == "mermaid" else aoi.recovery_dot(doc)
     return _emit(args, prog, fmt, text)
 
 
@@ -257,7 +234,6 @@ def _check_inputs(args: argparse.Namespace, prog: str) -> int | None:
 
 def _docs(args: argparse.Namespace, prog: str) -> int:
     from statecharts.loader import load_spec
-    from statecharts.render.aoi import load_aoi_documents
     from statecharts.render.generate import build, write
 
     out = Path(args.output)
@@ -267,8 +243,7 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
     with Progress(prog) as progress:
         progress.update("loading the spec")
         spec = load_spec(args.spec)
-        docs = load_aoi_documents(args.spec)
-        artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False, aoi=docs,
+        artefacts = build(spec, _scenario_roots(args), out, scxml=False, readme=False,
                           progress=progress.update)
         progress.update(f"writing {len(artefacts.files)} files")
         try:
@@ -283,7 +258,6 @@ def _docs(args: argparse.Namespace, prog: str) -> int:
 
 def _generate(args: argparse.Namespace, prog: str) -> int:
     from statecharts.loader import load_spec
-    from statecharts.render.aoi import load_aoi_documents
     from statecharts.render.generate import FIX_COMMAND, build, stale_files, write
 
     out = Path(args.output)
@@ -293,9 +267,8 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
     with Progress(prog) as progress:
         progress.update("loading the spec")
         spec = load_spec(args.spec)
-        docs = load_aoi_documents(args.spec)
         if args.check:
-            artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip", aoi=docs,
+            artefacts = build(spec, _scenario_roots(args), out, missing_renderer="skip",
                               progress=progress.update)
             progress.update("comparing")
             with tempfile.TemporaryDirectory(prefix="motionchart-generate-") as tmp:
@@ -311,7 +284,7 @@ def _generate(args: argparse.Namespace, prog: str) -> int:
                 print(f"  {out.as_posix().rstrip('/')}/{rel}{note}", file=sys.stderr)
             print(f"run `{FIX_COMMAND}` (or `motionchart generate`) to update it", file=sys.stderr)
             return EXIT_FAIL
-        artefacts = build(spec, _scenario_roots(args), out, aoi=docs, progress=progress.update)
+        artefacts = build(spec, _scenario_roots(args), out, progress=progress.update)
         progress.update(f"writing {len(artefacts.files)} files")
         try:
             report = replace_folder(out, lambda folder: write(folder, artefacts.files, prune=True))

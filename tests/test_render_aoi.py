@@ -1,14 +1,16 @@
 """The add-on instruction's generated artefacts: reference page, flowchart, recovery chart.
 
-Expected values are typed in from the documents, not read from the spec: the order of
-the 17 ordered checks is the one of 003 §1.3.2 as docs/aoi.md resolves it (1017 placed
-after 1016 and the last rows 1025, 1002, 1118: INT-022, INT-026), the 21 codes are those
-of 003 §2.4, and the sub-instructions' preconditions and ``.ERR`` codes are the table of
-docs/aoi.md ("The recovery chart").  The tests then check that the spec agrees with
-them and that the artefacts show them: in the page's tables, one flowchart decision per
-check in that order, each failing to a box with its code, DOT text that is the same on
-every run and that Graphviz accepts, and the artefacts written by ``generate`` / ``docs``
-and drawn by ``diagram``.
+They come from the common renderers, fed with the IR (``spec.add_ons``).  Expected values
+are typed in from the documents, not read from the spec: the order of the 17 ordered
+checks is the one of 003 §1.3.2 as docs/aoi.md resolves it (1017 placed after 1016 and
+the last rows 1025, 1002, 1118: INT-022, INT-026), the 21 codes are those of 003 §2.4,
+the axis data types of the references those of 003 §2.2 (so MAH, MAM and MAG run on the
+CIP drive axis and MRP on the virtual path axis), and the preconditions of the calls are
+the ``.ERR`` codes of docs/aoi.md ("The recovery chart").  The tests check that the spec
+agrees with them and that the artefacts show them: in the page's tables, one flowchart
+decision per check in that order, each failing to a box with its code, a recovery chart
+with every state and transition, DOT that is the same on every run and that Graphviz
+accepts, and the artefacts written by ``generate`` / ``docs`` and drawn by ``diagram``.
 """
 
 from __future__ import annotations
@@ -16,27 +18,19 @@ from __future__ import annotations
 import contextlib
 import io
 import re
-import shutil
 from pathlib import Path
 
 import pytest
 
 from checker import cli
-from statecharts.aoi import bundled_aoi
-from statecharts.loader import bundled_spec_dir, load_spec
-from statecharts.render import graphviz_bin
-from statecharts.render.aoi import (
-    AoiDocument,
-    aoi_flowchart_dot,
-    aoi_flowchart_mermaid,
-    aoi_page,
-    aoi_spec_dirs,
-    build_aoi_flowchart,
-    load_aoi_document,
-    recovery_dot,
-    recovery_mermaid,
-)
+from statecharts import ir
+from statecharts.loader import load_spec
+from statecharts.render import graphviz_bin, instruction_dot, instruction_mermaid
+from statecharts.render.addon import addon_page, recovery_chart
+from statecharts.render.dot import chart_dot
+from statecharts.render.flowchart import build_flowchart, split_flowchart
 from statecharts.render.generate import build
+from statecharts.render.mermaid import chart_mermaid
 from statecharts.render.traceability import trace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,21 +44,28 @@ CHECK_ORDER = [1000, 1001, 1005, 1006, 1007, 1008, 1010, 1011, 1012, 1013, 1014,
 SYNC1_ONLY = {1012, 1013, 1014, 1015, 1016, 1017}
 #: 003 §2.4: every code the instruction reports (the ordered checks' and the four call errors).
 ALL_CODES = sorted([*CHECK_ORDER, 1020, 1022, 1023, 1027])
-#: docs/aoi.md "The recovery chart": the state calling each instruction and its code.
+#: docs/aoi.md "The recovery chart": the instruction each calling state issues and its code.
 CALL_CODES = {"MAH": 1020, "MAM": 1022, "MAG": 1023, "MRP": 1027}
-#: docs/aoi.md: each sub-instruction's preconditions in order, as .ERR codes.
-SUB_ERRS = {"MAH": [87, 41], "MAM": [87, 17, 13], "MAG": [87, 16], "MRP": [16, 13], "MAS": []}
+#: 003 §2.2: Ref_AxisPhy is an AXIS_CIP_DRIVE, Ref_AxisPth an AXIS_VIRTUAL; the recovery homes,
+#: moves and gears the physical axis and redefines the path axis (003 §1.1, §1.2).
+CALLED_VARIANTS = {"MAH": "MAH_CIP", "MAM": "MAM_CIP", "MAG": "MAG_CIP", "MRP": "MRP_VIRTUAL"}
+#: docs/aoi.md: the preconditions of each call, as .ERR codes; the variant called checks them (in its own order).
+CALL_ERRS = {"MAH": [87, 41], "MAM": [87, 17, 13], "MAG": [87, 16], "MRP": [16, 13]}
 
 
 @pytest.fixture(scope="module")
-def doc() -> AoiDocument:
-    return load_aoi_document()
+def spec() -> ir.Spec:
+    return load_spec()
 
 
 @pytest.fixture(scope="module")
-def page(doc: AoiDocument) -> str:
-    spec = load_spec()
-    return aoi_page(doc, trace(spec, [ROOT / "scenarios"]), {e.code: e.name for e in spec.errors})
+def aoi(spec: ir.Spec) -> ir.AddOnInstruction:
+    return spec.add_on(AOI_ID)
+
+
+@pytest.fixture(scope="module")
+def page(spec: ir.Spec, aoi: ir.AddOnInstruction) -> str:
+    return addon_page(spec, aoi, trace(spec, []))
 
 
 def section(page: str, title: str) -> str:
@@ -77,9 +78,13 @@ def section(page: str, title: str) -> str:
     return rest[: end.start()] if end else rest
 
 
-def table_rows(text: str) -> list[list[str]]:
-    rows = [line for line in text.splitlines() if line.startswith("| ")]
-    return [[c.strip() for c in re.split(r"(?<!\\)\|", r)[1:-1]] for r in rows[1:]]  # without the header
+def table_rows(text: str) -> list[dict[str, str]]:
+    """The first Markdown table of ``text`` as header -> cell."""
+    rows = [[c.strip() for c in re.split(r"(?<!\\)\|", line)[1:-1]] for line in text.splitlines()
+            if line.startswith("| ")]
+    header, *body = rows
+    assert all(len(r) == len(header) for r in body)
+    return [dict(zip(header, r)) for r in body]
 
 
 def run(argv: list[str]) -> tuple[int, str, str]:
@@ -92,213 +97,212 @@ def run(argv: list[str]) -> tuple[int, str, str]:
 # --------------------------------------------------------------------------- the spec agrees with the documents
 
 
-def test_spec_check_order_is_the_documented_order() -> None:
-    aoi = bundled_aoi()
-    checks = aoi.add_on.checks
-    assert [c.err for c in checks] == CHECK_ORDER
+def test_spec_check_order_is_the_documented_order(aoi: ir.AddOnInstruction) -> None:
+    assert [c.err for c in aoi.checks] == CHECK_ORDER
     # a check restricted to SyncType 1 says so first: "Cfg_SyncType == 1 and (...)"
-    assert {c.err for c in checks if c.fails_when.text.startswith("Cfg_SyncType == 1 and (")} == SYNC1_ONLY
-    assert all("Cfg_SyncType" not in c.fails_when.text for c in checks if c.err not in SYNC1_ONLY)
-    assert sorted(code for code, _ in aoi.errors) == ALL_CODES
+    assert {c.err for c in aoi.checks if c.fails_when.text.startswith("Cfg_SyncType == 1 and (")} == SYNC1_ONLY
+    assert all("Cfg_SyncType" not in c.fails_when.text for c in aoi.checks if c.err not in SYNC1_ONLY)
+    assert sorted(e.code for e in aoi.errors) == ALL_CODES
 
 
 # --------------------------------------------------------------------------- reference page
 
 
-def test_check_table_lists_the_codes_in_spec_and_documented_order(doc: AoiDocument, page: str) -> None:
-    rows = table_rows(section(page, "Checks, in the order they run"))
-    assert [r[0] for r in rows] == [str(n) for n in range(1, len(CHECK_ORDER) + 1)]
-    codes = [int(re.match(r"\[(\d+)\]", r[2]).group(1)) for r in rows]
-    assert codes == [c.err for c in bundled_aoi().add_on.checks]
-    assert codes == CHECK_ORDER
-    for r, code in zip(rows, codes):
-        assert r[3].startswith("`Cfg_SyncType == 1 and (") == (code in SYNC1_ONLY), r
-        assert r[5] and r[5] != "—"  # the source
-        assert "raM_Opr_SyncPthPhyAx_CD.yaml:" in r[7]  # defined at
-    # the interpretation links the documents name
-    by_code = dict(zip(codes, rows))
-    assert "INT-022" in by_code[1118][6] and "INT-026" in by_code[1017][6] and "INT-026" in by_code[1002][6]
+def test_check_table_lists_the_codes_in_the_documented_order(page: str) -> None:
+    rows = table_rows(section(page, "Checks, in the order they are evaluated"))
+    assert [r["#"] for r in rows] == [str(n) for n in range(1, len(CHECK_ORDER) + 1)]
+    assert [int(r["Sts_ERR"]) for r in rows] == CHECK_ORDER
+    by_code = {int(r["Sts_ERR"]): r for r in rows}
+    for code, r in by_code.items():
+        assert r["Fails when"].startswith("`Cfg_SyncType == 1 and (") == (code in SYNC1_ONLY), r
+        assert r["Source"].startswith("SYNC-RM") and r["Error"] not in ("", "—")
+        assert f"{AOI_ID}.yaml:" in r["Defined at"]
+    # the interpretations the documents' gaps needed
+    assert "INT-022" in by_code[1118]["Interpretation / confidence"]
+    assert "INT-026" in by_code[1017]["Interpretation / confidence"]
+    assert "INT-026" in by_code[1002]["Interpretation / confidence"]
 
 
-def test_every_error_code_appears_in_the_page(doc: AoiDocument, page: str) -> None:
+def test_codes_table_lists_every_documented_code_with_its_source(page: str) -> None:
     rows = table_rows(section(page, "Error codes"))
-    listed = [int(re.search(r"</a>(\d+)$", r[0]).group(1)) for r in rows]
-    assert listed == ALL_CODES == sorted(e.code for e in doc.errors)
-    for r in rows:
-        assert r[1] and r[2] != "— (reported by nothing)" and r[3] != "—", r
-    for code in ALL_CODES:
-        assert str(code) in page
-    # the four call errors are reported by the state calling the instruction
+    listed = [int(r["Sts_ERR"].rsplit(">", 1)[-1]) for r in rows]
+    assert listed == ALL_CODES
     by_code = dict(zip(listed, rows))
-    for mnemonic, code in CALL_CODES.items():
-        assert f"({mnemonic} fails)" in by_code[code][2]
+    for code, r in by_code.items():
+        assert r["Source"] == f"SYNC-RM §2.4 {code}" or r["Source"].startswith(f"SYNC-RM §2.4 {code},"), r
+        assert r["Name"] not in ("", "—") and r["Modelled"] == "yes", r
+    for code in CHECK_ORDER:
+        assert by_code[code]["How the model produces it"].startswith("check ["), code
+    for mnemonic, code in CALL_CODES.items():  # the four call errors come from the calling state
+        assert f"when its {mnemonic} call errs" in by_code[code]["How the model produces it"]
 
 
-def test_page_lists_inputs_outputs_and_recovery(doc: AoiDocument, page: str) -> None:
-    inputs = {r[0].strip("`"): r for r in table_rows(section(page, "Inputs"))}
-    # 003 §2.2 and docs/aoi.md: the three references and six configuration inputs
-    assert list(inputs) == ["Ref_AxisPhy", "Ref_AxisPth", "Ref_Handle", "Cfg_SyncType", "Cfg_AllowHome",
+def test_page_lists_parameters_status_and_local_tags(page: str) -> None:
+    params = {r["Parameter"].split("`")[1]: r for r in table_rows(section(page, "Parameters"))}
+    # 003 §2.2, in Logix order: the three references and six configuration inputs
+    assert list(params) == ["Ref_AxisPhy", "Ref_AxisPth", "Ref_Handle", "Cfg_SyncType", "Cfg_AllowHome",
                             "Cfg_TravelLIM", "Cfg_RotaryShortestTOL", "Cfg_MoveType", "Set_Speed"]
-    assert inputs["Ref_AxisPhy"][2] == "`AXIS_CIP_DRIVE`" and inputs["Set_Speed"][1] == "REAL"
-    outputs = [r[0].strip("`") for r in table_rows(section(page, "Outputs (status members)"))]
-    assert {"Sts_ER", "Sts_ERR", "Sts_EXERR", "Sts_IP", "Sts_PC"} <= set(outputs)
-    states = [re.search(r"`(\w+)`", r[0]).group(1) for r in table_rows(section(page, "States"))]
-    assert states == [s.state.id for s in doc.states]
-    transitions = table_rows(section(page, "Transitions"))
-    assert [(r[1].strip("`"), r[2].strip("`")) for r in transitions] == [(t.source, t.target) for t in doc.transitions]
-    assert "rung false (EnableIn false)" in page and "| prescan |" in page and "## Completion" in page
+    assert params["Ref_AxisPhy"]["Data type"] == "AXIS_CIP_DRIVE" and params["Set_Speed"]["Type"] == "REAL"
+    assert params["Ref_AxisPth"]["Usage"] == "InOut" and params["Cfg_AllowHome"]["Default"] == "false"
+    status = [r["Member"].strip("`") for r in table_rows(section(page, "Status tag"))]
+    assert {"Sts_ER", "Sts_ERR", "Sts_EXERR", "Sts_IP", "Sts_PC"} <= set(status)
+    assert [r["Variable"] for r in table_rows(section(page, "Local tags"))] == ["`path_verified`"]
+    routines = {r["Routine"]: r for r in table_rows(section(page, "Rung false and prescan"))}
+    assert "MAS" in routines["rung false"]["Also"] and "path_verified" in routines["prescan"]["Also"]
 
 
-def test_page_lists_sub_instructions_with_ordered_err_codes(page: str) -> None:
-    subs = section(page, "Sub-instructions")
-    for mnemonic, errs in SUB_ERRS.items():
-        m = re.search(rf"^### {mnemonic}: ", subs, re.M)
-        assert m, mnemonic
-        block = section(subs[m.start():], subs[m.start():].splitlines()[0].lstrip("# "))
-        rows = table_rows(block)
-        assert [int(re.match(r"\[?(\d+)", r[2]).group(1)) for r in rows] == errs, mnemonic
-        assert [r[0] for r in rows] == [str(n) for n in range(1, len(errs) + 1)]
-    # names from the main spec's error catalog, linked to it
-    assert "[87](../error-codes.md#err-87)" in subs
+def test_calls_link_to_the_variant_for_the_axis_data_type(spec: ir.Spec, page: str) -> None:
+    rows = table_rows(section(page, "Motion instructions it calls"))
+    got = {r["Call"].strip("`").split("(")[0].split("_")[0]: r for r in rows}
+    assert set(got) == set(CALLED_VARIANTS)
+    for mnemonic, variant in CALLED_VARIANTS.items():
+        r = got[mnemonic]
+        assert r["Instruction page"] == f"[{variant}]({variant}.md)"
+        assert r[f"{AOI_ID} code if it errs"].startswith(f"[{CALL_CODES[mnemonic]}]")
+        # the preconditions docs/aoi.md gives the call are checks of the variant called
+        assert set(CALL_ERRS[mnemonic]) <= {c.err for c in spec.instruction(variant).checks}, variant
+        assert (ROOT / "generated" / "instructions" / f"{variant}.md").is_file()
 
 
-def test_page_is_deterministic_and_has_no_absolute_path(doc: AoiDocument, page: str) -> None:
-    spec = load_spec()
-    again = aoi_page(load_aoi_document(), trace(spec, [ROOT / "scenarios"]), {e.code: e.name for e in spec.errors})
-    assert page == again
+def test_page_is_deterministic_and_has_no_absolute_path(spec: ir.Spec, page: str) -> None:
+    again = load_spec()
+    assert addon_page(again, again.add_on(AOI_ID), trace(again, [])) == page
     assert str(ROOT) not in page and str(Path.home()) not in page
 
 
 # --------------------------------------------------------------------------- flowchart
 
 
-def test_flowchart_has_one_decision_per_check_in_order(doc: AoiDocument) -> None:
-    fc = build_aoi_flowchart(doc)
-    checks = [n for n in fc.nodes if n.id.startswith("check_")]
-    assert all(n.kind == "decision" for n in checks)
-    assert [n.id for n in checks] == [f"check_{c.id}" for c in doc.checks]
-    assert len(checks) == len(CHECK_ORDER)
+def test_flowchart_has_one_decision_per_check_in_order(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    fc = build_flowchart(spec, aoi)
     nodes = {n.id: n for n in fc.nodes}
+    checks = [n for n in fc.nodes if n.id.startswith("check_")]
+    assert all(n.kind == "decision" for n in checks) and len(checks) == len(CHECK_ORDER)
     for n, (node, code) in enumerate(zip(checks, CHECK_ORDER), start=1):
         assert node.title[0].startswith(f"{n}. ")
         (yes,) = [e for e in fc.edges if e.source == node.id and e.label == "yes"]
         assert nodes[yes.target].kind == "error" and f"Sts_ERR = {code}" in nodes[yes.target].title
         assert " ".join(node.detail).startswith("Cfg_SyncType == 1 and (") == (code in SYNC1_ONLY)
-    # the "no" branches chain the checks top to bottom
+    # the "no" branches chain the checks top to bottom, then to the recovery
     chain = [e.target for e in fc.edges if e.label == "no" and e.source.startswith("check_")]
     assert chain == [n.id for n in checks[1:]] + ["recovery"]
-    # in the DOT text the decisions come in the same order
-    dot = aoi_flowchart_dot(doc)
+    dot = instruction_dot(spec, aoi)
     positions = [dot.index(f"\t{n.id} [") for n in checks]
     assert positions == sorted(positions)
+    # drawn in parts that each fit a page, every check in exactly one part
+    parts = split_flowchart(fc)
+    assert len(parts) >= 2
+    assert sorted(n.id for _name, part in parts for n in part.nodes if n.id.startswith("check_")) == sorted(
+        n.id for n in checks)
 
 
-def test_flowchart_ends_in_the_recovery_branch(doc: AoiDocument) -> None:
-    fc = build_aoi_flowchart(doc)
+def test_flowchart_ends_in_the_branches_of_the_recovery(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    fc = build_flowchart(spec, aoi)
     nodes = {n.id: n for n in fc.nodes}
     routes = [n for n in fc.nodes if n.id.startswith("route_")]
-    assert routes and all(n.kind == "decision" for n in routes)
+    # 003 §1.3.2: Virtual mode first, then SyncType 0 (redefine), SyncType 1 (home if needed, move)
+    assert [n.title[0] for n in routes] == ["1. to virtual_done?", "2. to redefine?", "3. to homing?",
+                                            "4. to moving?"]
     assert [e.target for e in fc.edges if e.source == "recovery"] == [routes[0].id]
-    # every call state fails to its code; done sets Sts_PC
+    calls = [nodes[e.target].detail for r in routes for e in fc.edges if e.source == r.id and e.label == "yes"]
+    assert calls[1][0].startswith("MRP_VIRTUAL(Ref_AxisPth") and calls[2][0].startswith("MAH_CIP(Ref_AxisPhy")
+    assert "flowchart TD" in instruction_mermaid(spec, aoi)
+
+
+# --------------------------------------------------------------------------- recovery chart
+
+
+def test_recovery_chart_shows_every_state_transition_and_error_exit(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    chart = recovery_chart(spec, aoi, ordered=True)
+    dot, mmd = chart_dot(chart, labels="full"), chart_mermaid(chart)
+    spec_states = [s.id for s in aoi.recovery.states]
+    for sid in spec_states:
+        assert f"\t{sid} [" in dot or f"cluster_{sid}" in dot
+        assert f'as {sid}' in mmd
+    for t in aoi.recovery.transitions:
+        assert re.search(rf"\t{t.source} -> {t.target} \[|\t{t.target} -> {t.source} \[", dot), (t.source, t.target)
+        assert f"{t.source} --> {t.target}" in mmd
+    # a false rung leaves the whole execution; every calling state errs with its code
+    assert "rung_false" in dot and "executing --> idle : rung_false" in mmd
     for mnemonic, code in CALL_CODES.items():
-        (state,) = [n for n in fc.nodes if n.kind == "process" and n.title[0].split(": ")[-1].startswith(mnemonic)]
-        (fail,) = [e for e in fc.edges if e.source == state.id and nodes[e.target].kind == "error"]
-        assert f"Sts_ERR = {code}" in nodes[fail.target].title
-    assert nodes["state_done"].kind == "done" and "Sts_PC" in nodes["state_done"].title[0]
-    assert "flowchart TD" in aoi_flowchart_mermaid(doc)
+        assert f"Sts_ERR = {code}" in mmd and f"Sts_EXERR = {mnemonic}.ERR" in mmd
+    # the calls are in the state boxes, with the variant for the axis
+    for variant in CALLED_VARIANTS.values():
+        assert f"entry / {variant}(" in dot
+    # the try order of the branches out of `checking`
+    assert "[1: handler.mode == 'virtual']" in mmd and "[4: Cfg_SyncType == 1]" in mmd
 
 
-# --------------------------------------------------------------------------- determinism and Graphviz
-
-
-def test_dot_is_deterministic(doc: AoiDocument) -> None:
-    other = load_aoi_document()
-    assert aoi_flowchart_dot(doc) == aoi_flowchart_dot(doc) == aoi_flowchart_dot(other)
-    assert recovery_dot(doc) == recovery_dot(doc) == recovery_dot(other)
-    assert recovery_mermaid(doc) == recovery_mermaid(other)
-    assert aoi_flowchart_mermaid(doc) == aoi_flowchart_mermaid(other)
-    for text in (aoi_flowchart_dot(doc), recovery_dot(doc)):
-        assert not re.search(r"0x[0-9a-f]{6,}", text)  # no memory addresses
-        assert str(ROOT) not in text
+def test_dot_is_deterministic(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    other = load_spec()
+    b = other.add_on(AOI_ID)
+    assert instruction_dot(spec, aoi) == instruction_dot(other, b)
+    assert chart_dot(recovery_chart(spec, aoi), labels="full") == chart_dot(recovery_chart(other, b), labels="full")
+    for text in (instruction_dot(spec, aoi), chart_dot(recovery_chart(spec, aoi))):
+        assert not re.search(r"0x[0-9a-f]{6,}", text) and str(ROOT) not in text
 
 
 @pytest.mark.skipif(not HAVE_GRAPHVIZ, reason="no Graphviz program (dot / graphviz-pure) here")
-def test_dot_parses_with_graphviz(doc: AoiDocument) -> None:
-    for text in (aoi_flowchart_dot(doc), recovery_dot(doc)):
-        svg = graphviz_bin.render(text, "svg")
-        assert b"<svg" in svg
-
-
-def test_recovery_chart_shows_every_state_and_transition(doc: AoiDocument) -> None:
-    dot = recovery_dot(doc)
-    mmd = recovery_mermaid(doc)
-    for s in doc.states:
-        assert f"\t{s.state.id} [" in dot
-        assert f'state "{s.state.id}" as s_{s.state.id}' in mmd
-    for t in doc.transitions:
-        assert f"\t{t.source} -> {t.target} [" in dot
-        assert f"s_{t.source} --> s_{t.target} : " in mmd
-    for mnemonic, code in CALL_CODES.items():
-        assert f"[{mnemonic} fails] / Sts_ERR = {code}" in mmd
-    assert "stateDiagram-v2" in mmd
+def test_dot_parses_with_graphviz(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    for text in (instruction_dot(spec, aoi), chart_dot(recovery_chart(spec, aoi, ordered=True), labels="full")):
+        assert b"<svg" in graphviz_bin.render(text, "svg")
 
 
 # --------------------------------------------------------------------------- generate, docs and diagram
 
 
-def test_build_writes_the_aoi_artefacts(tmp_path: Path, doc: AoiDocument) -> None:
-    spec = load_spec()
+def test_build_writes_the_aoi_artefacts(tmp_path: Path, spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
     fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
-    files = build(spec, [], tmp_path, render_svg=fake, aoi=[doc]).files
-    for name in (f"aoi/{AOI_ID}.md", f"flowcharts/{AOI_ID}.dot", f"flowcharts/{AOI_ID}.mmd",
-                 f"flowcharts/{AOI_ID}.svg", f"diagrams/{AOI_ID}_recovery.dot",
+    files = build(spec, [], tmp_path, render_svg=fake).files
+    for name in (f"instructions/{AOI_ID}.md", f"flowcharts/{AOI_ID}.dot", f"flowcharts/{AOI_ID}.mmd",
+                 f"flowcharts/{AOI_ID}.svg", f"flowcharts/{AOI_ID}.part1.dot", f"diagrams/{AOI_ID}_recovery.dot",
                  f"diagrams/{AOI_ID}_recovery.mmd", f"diagrams/{AOI_ID}_recovery.svg"):
         assert name in files, name
-    assert files[f"flowcharts/{AOI_ID}.dot"].decode() == aoi_flowchart_dot(doc)
+    assert files[f"flowcharts/{AOI_ID}.dot"].decode() == instruction_dot(spec, aoi)
     index = files["index.md"].decode()
-    assert f"[{AOI_ID}](aoi/{AOI_ID}.md)" in index and "## Add-on instructions" in index
+    assert f"[{AOI_ID}](instructions/{AOI_ID}.md)" in index and "## Add-on instructions" in index
     interps = files["interpretations.md"].decode()
-    assert f"](aoi/{AOI_ID}.md#check-energized)" in interps  # INT-022's user
-    # without the add-on instruction nothing of it is written
-    plain = build(spec, [], tmp_path, render_svg=fake).files
-    assert not any(AOI_ID in name for name in plain)
+    assert f"](instructions/{AOI_ID}.md#check-energized)" in interps  # INT-022's user
+    assert f"](instructions/{AOI_ID}.md#the-world-it-runs-in)" in interps  # INT-068's users
+    assert not any(name.startswith("aoi/") for name in files)
 
 
 def test_docs_command_writes_the_aoi_page(tmp_path: Path) -> None:
     out = tmp_path / "ref"
     code, _msg, err = run(["docs", "-o", str(out), "--scenarios", str(ROOT / "scenarios")])
     assert code == 0, err
-    page = (out / "aoi" / f"{AOI_ID}.md").read_text(encoding="utf-8")
-    assert "## Checks, in the order they run" in page and "## Recovery chart" in page
+    page = (out / "instructions" / f"{AOI_ID}.md").read_text(encoding="utf-8")
+    assert "## Checks, in the order they are evaluated" in page and "## Recovery chart" in page
     assert f"../flowcharts/{AOI_ID}.svg" in page and f"../diagrams/{AOI_ID}_recovery.svg" in page
-    assert "scenarios/aoi/err_1118_not_energized.yaml)" in page  # a scenario producing 1118
+    codes = section(page, "Error codes")
+    row = next(line for line in codes.splitlines() if '"code-1118"' in line)
+    assert "scenarios/aoi/err_1118_not_energized.yaml)" in row  # a scenario producing 1118
     for md in out.rglob("*.md"):  # every relative link of the reference resolves
         for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", md.read_text(encoding="utf-8")):
             if "://" not in target:
                 assert (md.parent / target).exists(), f"{md.relative_to(out)} links to missing {target}"
 
 
-def test_diagram_command_draws_the_aoi(doc: AoiDocument) -> None:
+def test_diagram_command_draws_the_aoi(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
     code, out, err = run(["diagram", AOI_ID])
-    assert (code, err) == (0, "") and out == aoi_flowchart_dot(doc)
+    assert (code, err) == (0, "") and out == instruction_dot(spec, aoi)
+    code, out, err = run(["diagram", AOI_ID, "--part", "part2"])
+    assert (code, err) == (0, "") and out == instruction_dot(spec, aoi, part="part2")
     code, out, err = run(["diagram", AOI_ID.lower() + "_RECOVERY", "--format", "mermaid"])  # any case
-    assert (code, err) == (0, "") and out == recovery_mermaid(doc)
+    assert (code, err) == (0, "") and out == chart_mermaid(recovery_chart(spec, aoi, ordered=True))
+    code, out, err = run(["diagram", AOI_ID + "_recovery"])  # as generated/ draws it: with the calls
+    assert (code, err) == (0, "") and out == chart_dot(recovery_chart(spec, aoi, ordered=True), labels="full")
     code, out, err = run(["diagram", "NoSuchThing"])
     assert code == 2 and out == "" and f"add-on instructions: {AOI_ID}, {AOI_ID}_recovery" in err
 
 
-@pytest.mark.skipif(not HAVE_GRAPHVIZ, reason="no Graphviz program (dot / graphviz-pure) here")
-def test_diagram_command_svg(tmp_path: Path) -> None:
-    code, _out, err = run(["diagram", AOI_ID, "-o", str(tmp_path / "aoi.svg")])
-    assert code == 0, err
-    assert b"<svg" in (tmp_path / "aoi.svg").read_bytes()
-
-
-def test_spec_dirs_follow_the_spec_arguments(tmp_path: Path) -> None:
-    assert aoi_spec_dirs(None) == [bundled_spec_dir()]
-    copy = tmp_path / "myspec"
-    shutil.copytree(bundled_spec_dir(), copy, ignore=shutil.ignore_patterns("__pycache__", "*.py", "schema"))
-    assert aoi_spec_dirs([copy, copy / "charts"]) == [copy]
-    doc = load_aoi_document(copy)
-    assert doc.file == "myspec/addons/raM_Opr_SyncPthPhyAx_CD.yaml"  # never absolute
-    assert all(s.file.startswith("myspec/instructions/motion/") for s in doc.subs)
+def test_committed_pages_of_the_move_instructions_are_linked_from_the_index() -> None:
+    """MAH, MAM, MAJ, MAS, MAG and MRP on CIP and virtual axes: page, flowchart and codes table."""
+    index = (ROOT / "generated" / "index.md").read_text(encoding="utf-8")
+    for mnemonic in ("MAH", "MAM", "MAJ", "MAS", "MAG", "MRP"):
+        for family in ("CIP", "VIRTUAL"):
+            v = f"{mnemonic}_{family}"
+            assert f"[{v}](instructions/{v}.md)" in index and f"[svg](flowcharts/{v}.svg)" in index, v
+            page = (ROOT / "generated" / "instructions" / f"{v}.md").read_text(encoding="utf-8")
+            assert "## Error codes" in page and f"../flowcharts/{v}.svg" in page, v
+            assert all((ROOT / "generated" / "flowcharts" / f"{v}.{ext}").is_file() for ext in ("dot", "mmd", "svg"))

@@ -15,8 +15,8 @@ an instruction of the bundled spec):
 * :mod:`~statecharts.render.scxml` -- charts as W3C SCXML;
 * :mod:`~statecharts.render.traceability` -- runs the scenarios to see what they exercise;
 * :mod:`~statecharts.render.reference` -- the Markdown reference;
-* :mod:`~statecharts.render.aoi` -- the add-on instructions of ``spec/addons/`` (their own
-  loader, :mod:`statecharts.aoi`): reference page, flowchart, recovery-chart diagram;
+* :mod:`~statecharts.render.addon` -- what is particular to an add-on instruction: its
+  flowchart's tail, its recovery as a chart for the diagram renderers, its page;
 * :mod:`~statecharts.render.generate` -- every artefact as bytes, written or checked.
 
 >>> from statecharts.loader import load_spec
@@ -31,6 +31,7 @@ True
 from __future__ import annotations
 
 from statecharts import ir
+from statecharts.render.addon import RECOVERY_SUFFIX, recovery_chart
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import build_flowchart, flowchart_dot, instruction_dot
 from statecharts.render.mermaid import chart_mermaid, flowchart_mermaid, instruction_mermaid
@@ -58,24 +59,25 @@ class UnknownTarget(KeyError):
         self.name = name
         self.charts = tuple(c.id for c in spec.charts)
         self.instructions = tuple(i.id for i in spec.instructions)
+        self.add_ons = tuple(n for a in spec.add_ons for n in (a.id, a.id + RECOVERY_SUFFIX))
         super().__init__(name)
 
     def __str__(self) -> str:
         return (f"unknown chart {self.name!r}; charts: {', '.join(self.charts) or '(none)'}; "
-                f"instructions: {', '.join(self.instructions) or '(none)'}")
+                f"instructions: {', '.join(self.instructions) or '(none)'}"
+                + (f"; add-on instructions: {', '.join(self.add_ons)}" if self.add_ons else ""))
 
 
-def resolve(spec: ir.Spec, name: str) -> ir.Chart | ir.Instruction:
-    """The chart or instruction called ``name`` (exact id first, then ignoring case)."""
-    for c in spec.charts:
-        if c.id == name:
-            return c
-    for i in spec.instructions:
-        if i.id == name:
-            return i
-    folded = name.casefold()
-    matches: list[ir.Chart | ir.Instruction] = [c for c in spec.charts if c.id.casefold() == folded]
-    matches += [i for i in spec.instructions if i.id.casefold() == folded]
+def resolve(spec: ir.Spec, name: str) -> ir.Chart | ir.Instruction | ir.AddOnInstruction:
+    """The chart, instruction or add-on instruction called ``name``, or the recovery chart
+    of an add-on instruction for ``<id>_recovery`` (exact id first, then ignoring case)."""
+    targets: list[tuple[str, ir.Chart | ir.Instruction | ir.AddOnInstruction]] = [
+        *((c.id, c) for c in spec.charts), *((i.id, i) for i in spec.instructions),
+        *((a.id, a) for a in spec.add_ons), *((a.id + RECOVERY_SUFFIX, recovery_chart(spec, a, ordered=True)) for a in spec.add_ons)]
+    for key, target in targets:
+        if key == name:
+            return target
+    matches = [t for key, t in targets if key.casefold() == name.casefold()]
     if len(matches) == 1:
         return matches[0]
     raise UnknownTarget(name, spec)

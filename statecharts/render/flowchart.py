@@ -24,6 +24,7 @@ engine runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
 import graphviz
@@ -82,13 +83,39 @@ def _error_box(spec: ir.Spec, ins: ir.Instruction, check: ir.Check, node_id: str
     return FlowNode(node_id, "error", title, detail)
 
 
-def build_flowchart(spec: ir.Spec, ins: ir.Instruction, labels: str = "full") -> Flowchart:
-    """The flowchart of ``ins`` (see the module docstring for what it shows).
+def check_chain(checks: Sequence[ir.Check], prev: str, title: Callable[[ir.Check], str],
+                box: Callable[[ir.Check, str], FlowNode], nodes: list[FlowNode], edges: list[FlowEdge],
+                side: list[tuple[str, str]]) -> tuple[str, bool]:
+    """One decision per check after ``prev``, in order, each failing right to its ``box``:
+    the last decision, and whether a check is answered at the coarse update."""
+    message = False
+    for n, check in enumerate(checks, start=1):
+        did, eid = f"check_{check.id}", f"err_{check.id}"
+        lines = [f"{n}. {line}" if i == 0 else line for i, line in enumerate(paragraph(title(check), 30))]
+        if check.stage is ir.Stage.MESSAGE:
+            lines.append("(answered at the coarse update)")
+            message = True
+        nodes.append(FlowNode(did, "decision", tuple(lines), tuple(wrap(check.fails_when.text, 30))))
+        nodes.append(box(check, eid))
+        edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
+        edges.append(FlowEdge(did, eid, "yes"))
+        side.append((did, eid))
+        prev = did
+    return prev, message
+
+
+def build_flowchart(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, labels: str = "full") -> Flowchart:
+    """The flowchart of ``ins`` (see the module docstring for what it shows; an add-on
+    instruction's is :func:`statecharts.render.addon.addon_flowchart`).
 
     ``labels`` (:data:`statecharts.render.dot.LABEL_LEVELS`): ``full`` shows every
     condition and action, ``guards`` the conditions without the actions, ``events`` the
     prose alone."""
-    fc = _build_flowchart(spec, ins)
+    if isinstance(ins, ir.AddOnInstruction):
+        from statecharts.render.addon import addon_flowchart
+        fc = addon_flowchart(spec, ins)
+    else:
+        fc = _build_flowchart(spec, ins)
     if labels == "full":
         return fc
     keep_conditions = labels == "guards"
@@ -118,19 +145,8 @@ def _build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
     edges.append(FlowEdge(prev, "execute", "yes" if prev == "row_guard" else ""))
     prev = "execute"
 
-    message_note = False
-    for n, check in enumerate(ins.checks, start=1):
-        did, eid = f"check_{check.id}", f"err_{check.id}"
-        title = [f"{n}. {line}" if i == 0 else line for i, line in enumerate(paragraph(check.description, 30))]
-        if check.stage is ir.Stage.MESSAGE:
-            title.append("(answered at the coarse update)")
-            message_note = True
-        nodes.append(FlowNode(did, "decision", tuple(title), tuple(wrap(check.fails_when.text, 30))))
-        nodes.append(_error_box(spec, ins, check, eid))
-        edges.append(FlowEdge(prev, did, "no" if prev.startswith("check_") else ""))
-        edges.append(FlowEdge(did, eid, "yes"))
-        side.append((did, eid))
-        prev = did
+    prev, message_note = check_chain(ins.checks, prev, lambda c: c.description,
+                                     lambda c, eid: _error_box(spec, ins, c, eid), nodes, edges, side)
 
     accept = ["Request accepted"]
     accept_detail = [a.text for a in table.on_accept]
@@ -227,7 +243,7 @@ def split_flowchart(fc: Flowchart) -> list[tuple[str, Flowchart]]:
     return parts
 
 
-def flowchart_part_names(spec: ir.Spec, ins: ir.Instruction) -> tuple[str, ...]:
+def flowchart_part_names(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction) -> tuple[str, ...]:
     """``whole``, and ``part1`` ... for a flowchart long enough to be split."""
     return ("whole", *(name for name, _fc in split_flowchart(build_flowchart(spec, ins))))
 
@@ -305,7 +321,7 @@ def flowchart_dot(fc: Flowchart) -> str:
     return str(g.source)
 
 
-def instruction_dot(spec: ir.Spec, ins: ir.Instruction, *, labels: str | None = None, part: str = "whole") -> str:
+def instruction_dot(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, *, labels: str | None = None, part: str = "whole") -> str:
     """The DOT text of ``ins``'s flowchart (``part``: ``whole`` or a name of
     :func:`flowchart_parts`; KeyError for another)."""
     from statecharts.render.dot import DEFAULT_LABELS, check_labels
@@ -316,5 +332,5 @@ def instruction_dot(spec: ir.Spec, ins: ir.Instruction, *, labels: str | None = 
     return flowchart_dot(fc)
 
 
-__all__ = ["PART_CHECKS", "FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "flowchart_dot",
+__all__ = ["PART_CHECKS", "FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "check_chain", "flowchart_dot",
            "flowchart_part_names", "instruction_dot", "split_flowchart"]

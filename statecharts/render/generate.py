@@ -10,8 +10,8 @@ Layout of the output directory::
     diagrams/<chart>.{dot,mmd,svg}
     flowcharts/<MNEMONIC>.{dot,mmd,svg}
     scxml/<chart>.scxml         (``generate`` only)
-    aoi/<AOI>.md                add-on instructions (``spec/addons/``), with
-    flowcharts/<AOI>.{dot,mmd,svg}, diagrams/<AOI>_recovery.{dot,mmd,svg}
+    diagrams/<AOI>_recovery.{dot,mmd,svg}   an add-on instruction's recovery chart (its
+                                page and flowchart are with the instructions')
 
 The bytes depend only on the spec and the scenarios: sorted or spec-ordered content,
 relative paths, no dates.  SVG is the one artefact made by an external program; each
@@ -31,20 +31,20 @@ from pathlib import Path
 
 from statecharts import ir
 from statecharts.diagnostics import Diagnostic, SpecError
-from statecharts.render import aoi as aoi_render
 from statecharts.render import sources as sources_render
 from statecharts.render import views
+from statecharts.render.addon import RECOVERY_SUFFIX, recovery_chart
 from statecharts.render.dot import chart_dot
-from statecharts.render.flowchart import flowchart_dot, flowchart_part_names, instruction_dot, split_flowchart
+from statecharts.render.flowchart import flowchart_part_names, instruction_dot
 from statecharts.render.graphviz_bin import GraphvizNotFoundError, render
 from statecharts.render.labels import spec_path
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
-from statecharts.render.reference import GENERATED_NOTE, Use, reference_pages
+from statecharts.render.reference import GENERATED_NOTE, reference_pages
 from statecharts.render.scxml import chart_scxml
 from statecharts.render.traceability import Traceability, trace
 
 #: Sub-directories whose whole content the generator owns (stale files there are removed).
-MANAGED_DIRS = ("charts", "instructions", "diagrams", "flowcharts", "scxml", "aoi")
+MANAGED_DIRS = ("charts", "instructions", "diagrams", "flowcharts", "scxml")
 #: Top-level files the generator owns.
 TOP_FILES = ("README.md", "index.md", "interpretations.md", "error-codes.md", "traceability.md", "sources.md")
 #: The command that brings ``generated/`` up to date.
@@ -81,9 +81,8 @@ def _readme() -> str:
         "- [sources.md](sources.md): every document the spec cites, with the elements citing each page or section",
         "- `diagrams/`: state diagrams as Graphviz DOT, Mermaid and SVG",
         "- `flowcharts/`: instruction flowcharts as Graphviz DOT, Mermaid and SVG (also those of the "
-        "add-on instructions)",
-        "- `aoi/`: one page per add-on instruction (`spec/addons/`): inputs, ordered checks, error codes, "
-        "recovery chart (`diagrams/<id>_recovery.*`), the motion instructions it calls",
+        "add-on instructions, whose recovery charts are `diagrams/<id>_recovery.*`)",
+        "- `charts/`, `instructions/`: one reference page per chart, instruction and add-on instruction",
         "- `scxml/`: each chart as W3C SCXML (loads with `statemachine.io.load(path, format=\"scxml\")`)", "",
     ])
 
@@ -126,13 +125,9 @@ def build(
     readme: bool = True,
     render_svg: Callable[[str], bytes] | None = None,
     missing_renderer: str = "raise",
-    aoi: Sequence[aoi_render.AoiDocument] = (),
     progress: Callable[[str, int | None, int | None], None] | None = None,
 ) -> Artefacts:
     """Everything for ``out_dir`` (used for relative links and as the SVG cache).
-
-    ``aoi``: the add-on instructions to document with the spec
-    (:func:`statecharts.render.aoi.load_aoi_documents`); none by default.
 
     ``missing_renderer`` says what to do when an SVG must be drawn and no Graphviz
     program is installed: ``"raise"`` (GraphvizNotFoundError) or ``"skip"`` (leave it
@@ -151,31 +146,20 @@ def build(
         text[f"diagrams/{c.id}.mmd"] = chart_mermaid(c)
         if scxml:
             text[f"scxml/{c.id}.scxml"] = chart_scxml(c, source=spec_path(spec, c.location.file))
-    for i in spec.instructions:
+    instructions: list[ir.Instruction | ir.AddOnInstruction] = [*spec.instructions, *spec.add_ons]
+    for i in instructions:
         for name in flowchart_part_names(spec, i):
             dots[f"flowcharts/{i.id}" + ("" if name == "whole" else f".{name}")] = instruction_dot(spec, i, part=name)
         text[f"flowcharts/{i.id}.mmd"] = instruction_mermaid(spec, i)
-    catalog = {e.code: e.name for e in spec.errors}
-    extra_uses: dict[str, list[Use]] = {}
-    for doc in aoi:
-        fc, rc = aoi_render.flowchart_name(doc), aoi_render.recovery_name(doc)
-        clash = [n for n in (f"flowcharts/{fc}", f"diagrams/{rc}") if n in dots]
-        if clash:
-            raise SpecError([Diagnostic(doc.file, doc.prov.line, 1, "aoi.id",
-                                        f"add-on instruction {doc.id!r} would overwrite {clash[0]}.dot; rename it")])
-        dots[f"flowcharts/{fc}"] = aoi_render.aoi_flowchart_dot(doc)
-        for part_name, part_fc in split_flowchart(aoi_render.build_aoi_flowchart(doc)):
-            dots[f"flowcharts/{fc}.{part_name}"] = flowchart_dot(part_fc)
-        text[f"flowcharts/{fc}.mmd"] = aoi_render.aoi_flowchart_mermaid(doc)
-        dots[f"diagrams/{rc}"] = aoi_render.recovery_dot(doc)
-        text[f"diagrams/{rc}.mmd"] = aoi_render.recovery_mermaid(doc)
-        text[aoi_render.page_path(doc)] = aoi_render.aoi_page(doc, tr, catalog, [c.id for c in spec.charts])
-        for k, uses in aoi_render.aoi_uses(doc).items():
-            extra_uses.setdefault(k, []).extend(uses)
+    for a in spec.add_ons:
+        if a.id + RECOVERY_SUFFIX in {c.id for c in spec.charts}:
+            raise SpecError([Diagnostic(a.location.file, a.location.line, 1, "add_on_instruction.id",
+                                        f"its recovery chart would overwrite the diagram of chart {a.id}{RECOVERY_SUFFIX}")])
+        dots[f"diagrams/{a.id}{RECOVERY_SUFFIX}"] = chart_dot(recovery_chart(spec, a, ordered=True), labels="full")
+        text[f"diagrams/{a.id}{RECOVERY_SUFFIX}.mmd"] = chart_mermaid(recovery_chart(spec, a, ordered=True))
     for stem, dot in dots.items():
         text[f"{stem}.dot"] = dot
-    aoi_table = (aoi_render.INDEX_HEADER, aoi_render.index_rows(aoi)) if aoi else None
-    text.update(reference_pages(spec, tr, scxml=scxml, aoi_table=aoi_table, extra_uses=extra_uses))
+    text.update(reference_pages(spec, tr, scxml=scxml))
     if readme:
         text["README.md"] = _readme()
         page = sources_page(spec)

@@ -152,6 +152,6 @@ def flowchart_mermaid(fc: Flowchart) -> str:
     return "\n".join(out) + "\n"
 
 
-def instruction_mermaid(spec: ir.Spec, ins: ir.Instruction) -> str:
+def instruction_mermaid(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction) -> str:
     """The Mermaid flowchart of ``ins``."""
     return flowchart_mermaid(build_flowchart(spec, ins))

@@ -16,7 +16,7 @@ documents and the engine use), sorted order everywhere else, relative links only
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 from statecharts import ir
@@ -136,13 +136,18 @@ def interpretation_uses(spec: ir.Spec) -> dict[str, list[Use]]:
         add(code.provenance, f"error code {code.code} {code.name}", f"error-codes.md#{anchor('err-' + str(code.code))}")
     for x in spec.extended_errors:
         add(x.provenance, f"{x.instruction} extended error {x.err}/{x.exerr} {x.name}", "error-codes.md#extended-error-codes")
+    if spec.add_ons:
+        from statecharts.render.addon import addon_uses
+        for a in spec.add_ons:
+            for k, more in addon_uses(a).items():
+                uses.setdefault(k, []).extend(more)
     return {k: sorted(set(v), key=lambda u: u.label) for k, v in sorted(uses.items())}
 
 
 # --------------------------------------------------------------------------- pages
 
 
-def _diagram_block(svg: str, mmd_text: str, mmd_link: str, dot_link: str, alt: str) -> list[str]:
+def diagram_block(svg: str, mmd_text: str, mmd_link: str, dot_link: str, alt: str) -> list[str]:
     return [
         f"![{alt}]({svg})",
         "",
@@ -156,6 +161,62 @@ def _diagram_block(svg: str, mmd_text: str, mmd_link: str, dot_link: str, alt: s
         "",
         "</details>",
     ]
+
+
+TRANSITIONS_NOTE = ("Transitions of one state and event are tried in priority order (lower first), then in the "
+                    "order written; an event-less transition is taken as soon as its guard holds; a transition "
+                    "without a target runs its actions and stays in the state.")
+
+
+def states_table(spec: ir.Spec, chart: ir.Chart, tr: Traceability, p: str,
+                 reaching: Callable[[str], list[ScenarioRun]] | None = None) -> list[str]:
+    """The states of ``chart``, in spec order, with the scenarios observing each
+    (``reaching``: those of a state id; default: the runs observing the chart in it)."""
+    rows = []
+    for s in chart.states:
+        kind = s.kind.value + (f" ({s.history_type})" if s.history_type else "")
+        parent = f", in `{s.parent}`" if s.parent else ""
+        actions = "; ".join([f"entry / {a.text}" for a in s.entry] + [f"exit / {a.text}" for a in s.exit])
+        reached = reaching(s.id) if reaching is not None else tr.reaching(chart.id, s.id)
+        rows.append([
+            cell("" if s.value is None else s.value),
+            f'<a id="{anchor("state-" + s.id)}"></a>{cell(s.name)}',
+            f"`{s.id}` ({kind}{parent})",
+            cell(s.description),
+            code(actions) if actions else "—",
+            cell(s.provenance.source),
+            interp_link(s.provenance.interpretation, p),
+            f"`{where(spec, s.location)}`",
+            scenario_links(reached, p, 3, tr.link_base) if tr.root is not None else "—",
+        ])
+    return table(["Value", "Name", "Id (kind)", "Meaning", "Entry / exit actions", "Source", "Interpretation",
+                  "Defined at", "Scenarios reaching it"], rows)
+
+
+def transitions_table(spec: ir.Spec, chart: ir.Chart, p: str) -> list[str]:
+    return table(["Id", "From", "Event", "Guard", "To", "Actions", "Priority", "Source", "Interpretation",
+                  "Defined at"], [[
+        f'<a id="{anchor("transition-" + t.id)}"></a>`{t.id}`',
+        f"`{t.source}`",
+        f"`{t.event}`" if t.event else "_(automatic)_",
+        code(t.guard.text) if t.guard is not None else "—",
+        f"`{t.target}`" if t.target else "_(stays)_",
+        code("; ".join(a.text for a in t.actions)) if t.actions else "—",
+        str(t.priority),
+        cell(t.provenance.source),
+        interp_link(t.provenance.interpretation, p),
+        f"`{where(spec, t.location)}`",
+    ] for t in chart.transitions])
+
+
+def variables_table(variables: Sequence[ir.Variable], p: str) -> list[str]:
+    return table(["Variable", "Type", "Initial", "Values", "Meaning", "Source", "Interpretation"], [
+        [f"`{v.name}`", v.type, f"`{v.initial!r}`",
+         cell(", ".join(str(x) for x in v.domain)) if v.domain is not None and len(v.domain) <= 12
+         else (f"{v.domain[0]} … {v.domain[-1]}" if v.domain else "any"),
+         cell(v.description), cell(v.provenance.source), interp_link(v.provenance.interpretation, p)]
+        for v in variables
+    ])
 
 
 def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool = True) -> str:
@@ -191,62 +252,17 @@ def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool 
                     f"![{n} part of {chart.id}]({p}diagrams/{st}.svg)", "",
                     f"Source: [Graphviz DOT]({p}diagrams/{st}.dot).", ""]
         out += ["### The whole chart", ""]
-    out += _diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(chart), f"{p}diagrams/{chart.id}.mmd",
+    out += diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(chart), f"{p}diagrams/{chart.id}.mmd",
                           f"{p}diagrams/{chart.id}.dot", f"State diagram of {chart.id}")
-    out += ["", "## States", ""]
-    rows = []
-    for s in chart.states:
-        kind = s.kind.value + (f" ({s.history_type})" if s.history_type else "")
-        parent = f", in `{s.parent}`" if s.parent else ""
-        actions = "; ".join([f"entry / {a.text}" for a in s.entry] + [f"exit / {a.text}" for a in s.exit])
-        reached = tr.reaching(chart.id, s.id)
-        rows.append([
-            cell("" if s.value is None else s.value),
-            f'<a id="{anchor("state-" + s.id)}"></a>{cell(s.name)}',
-            f"`{s.id}` ({kind}{parent})",
-            cell(s.description),
-            code(actions) if actions else "—",
-            cell(s.provenance.source),
-            interp_link(s.provenance.interpretation, p),
-            f"`{where(spec, s.location)}`",
-            scenario_links(reached, p, 3, tr.link_base) if tr.root is not None else "—",
-        ])
-    out += table(["Value", "Name", "Id (kind)", "Meaning", "Entry / exit actions", "Source", "Interpretation",
-                  "Defined at", "Scenarios reaching it"], rows)
-    out += ["", "## Transitions", "",
-            "Transitions of one state and event are tried in priority order (lower first), then in the "
-            "order written; an event-less transition is taken as soon as its guard holds; a transition "
-            "without a target runs its actions and stays in the state.", ""]
-    rows = []
-    for t in chart.transitions:
-        rows.append([
-            f'<a id="{anchor("transition-" + t.id)}"></a>`{t.id}`',
-            f"`{t.source}`",
-            f"`{t.event}`" if t.event else "_(automatic)_",
-            code(t.guard.text) if t.guard is not None else "—",
-            f"`{t.target}`" if t.target else "_(stays)_",
-            code("; ".join(a.text for a in t.actions)) if t.actions else "—",
-            str(t.priority),
-            cell(t.provenance.source),
-            interp_link(t.provenance.interpretation, p),
-            f"`{where(spec, t.location)}`",
-        ])
-    out += table(["Id", "From", "Event", "Guard", "To", "Actions", "Priority", "Source", "Interpretation",
-                  "Defined at"], rows)
+    out += ["", "## States", "", *states_table(spec, chart, tr, p)]
+    out += ["", "## Transitions", "", TRANSITIONS_NOTE, "", *transitions_table(spec, chart, p)]
     out += ["", "## Events", ""]
     out += table(["Event", "Kind", "Meaning", "Changes before the chart sees it", "Source", "Interpretation"], [
         [f"`{e.name}`", e.kind, cell(e.description), code("; ".join(a.text for a in e.actions)) if e.actions else "—",
          cell(e.provenance.source), interp_link(e.provenance.interpretation, p)]
         for e in chart.events
     ])
-    out += ["", "## Variables", ""]
-    out += table(["Variable", "Type", "Initial", "Values", "Meaning", "Source", "Interpretation"], [
-        [f"`{v.name}`", v.type, f"`{v.initial!r}`",
-         cell(", ".join(str(x) for x in v.domain)) if v.domain is not None and len(v.domain) <= 12
-         else (f"{v.domain[0]} … {v.domain[-1]}" if v.domain else "any"),
-         cell(v.description), cell(v.provenance.source), interp_link(v.provenance.interpretation, p)]
-        for v in chart.variables
-    ])
+    out += ["", "## Variables", "", *variables_table(chart.variables, p)]
     users = [i for i in spec.instructions if chart.id in i.charts]
     out += ["", "## Instructions acting on this chart", ""]
     out += table(["Instruction", "Request event", "Done when"], [
@@ -270,6 +286,38 @@ def _error_label(spec: ir.Spec, ins: ir.Instruction, err: int, exerr: int) -> tu
     return e.name, e.meaning, confidence(e.confidence), e.provenance.source
 
 
+def flowchart_section(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, p: str) -> list[str]:
+    """The flowchart of ``ins``: its parts when it is long, then the whole (SVG and Mermaid)."""
+    out = []
+    parts = [n for n in flowchart_part_names(spec, ins) if n != "whole"]
+    if parts:
+        out += [f"The flowchart is long, so it is also drawn in {len(parts)} parts that each fit a page; the whole "
+                f"flowchart follows them. `motionchart diagram {ins.id} --part NAME` draws one of them.", ""]
+        for part_name in parts:
+            out += [f"![{ins.id} flowchart, {part_name}]({p}flowcharts/{ins.id}.{part_name}.svg)", "",
+                    f"Source: [Graphviz DOT]({p}flowcharts/{ins.id}.{part_name}.dot).", ""]
+    return out + diagram_block(f"{p}flowcharts/{ins.id}.svg", instruction_mermaid(spec, ins),
+                                f"{p}flowcharts/{ins.id}.mmd", f"{p}flowcharts/{ins.id}.dot", f"Flowchart of {ins.id}")
+
+
+def checks_table(spec: ir.Spec, checks: Sequence[ir.Check], label: Callable[[ir.Check], tuple[str, str, str, str]],
+                 p: str, codes: tuple[str, str] = ("ERR", "EXERR")) -> list[str]:
+    """Ordered checks, numbered in evaluation order; ``label``: (name, meaning, confidence,
+    source) of a check's code; ``codes``: the headers of its two code columns."""
+    rows = []
+    for n, ch in enumerate(checks, start=1):
+        name, _meaning, conf, _src = label(ch)
+        rows.append([
+            str(n), f'<a id="{anchor("check-" + ch.id)}"></a>`{ch.id}`', code(ch.fails_when.text), ch.stage.value,
+            str(ch.err), str(ch.exerr) if ch.exerr else "—", cell(name), cell(ch.description),
+            cell(ch.provenance.source),
+            interp_link(ch.provenance.interpretation, p) if ch.provenance.interpretation else cell(conf),
+            f"`{where(spec, ch.location)}`",
+        ])
+    return table(["#", "Check", "Fails when", "Stage", *codes, "Error", "Meaning", "Source",
+                  "Interpretation / confidence", "Defined at"], rows)
+
+
 def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> str:
     p = "../"
     out = [GENERATED_NOTE, "", f"# {ins.id}: {ins.name}", "", cell(ins.description), ""]
@@ -285,15 +333,7 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
         "## Flowchart",
         "",
     ]
-    parts = [n for n in flowchart_part_names(spec, ins) if n != "whole"]
-    if parts:
-        out += [f"The flowchart is long, so it is also drawn in {len(parts)} parts that each fit a page; the whole "
-                f"flowchart follows them. `motionchart diagram {ins.id} --part NAME` draws one of them.", ""]
-        for part_name in parts:
-            out += [f"![{ins.id} flowchart, {part_name}]({p}flowcharts/{ins.id}.{part_name}.svg)", "",
-                    f"Source: [Graphviz DOT]({p}flowcharts/{ins.id}.{part_name}.dot).", ""]
-    out += _diagram_block(f"{p}flowcharts/{ins.id}.svg", instruction_mermaid(spec, ins), f"{p}flowcharts/{ins.id}.mmd",
-                          f"{p}flowcharts/{ins.id}.dot", f"Flowchart of {ins.id}")
+    out += flowchart_section(spec, ins, p)
     out += ["", "## Operands", ""]
     rows = []
     for o in ins.operands:
@@ -313,18 +353,7 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
             "The first check whose condition holds ends the instruction with `ER` and its code. A check of "
             "stage `message` is answered by the motion task when it processes the request at the coarse "
             "update; at that point every check is evaluated again, in this order.", ""]
-    rows = []
-    for n, ch in enumerate(ins.checks, start=1):
-        name, _meaning, conf, _src = _error_label(spec, ins, ch.err, ch.exerr)
-        rows.append([
-            str(n), f'<a id="{anchor("check-" + ch.id)}"></a>`{ch.id}`', code(ch.fails_when.text), ch.stage.value,
-            str(ch.err), str(ch.exerr) if ch.exerr else "—", cell(name), cell(ch.description),
-            cell(ch.provenance.source),
-            interp_link(ch.provenance.interpretation, p) if ch.provenance.interpretation else cell(conf),
-            f"`{where(spec, ch.location)}`",
-        ])
-    out += table(["#", "Check", "Fails when", "Stage", "ERR", "EXERR", "Error", "Meaning", "Source",
-                  "Interpretation / confidence", "Defined at"], rows)
+    out += checks_table(spec, ins.checks, lambda ch: _error_label(spec, ins, ch.err, ch.exerr), p)
     if ins.aborts:
         out += ["", "## Aborts of a request in progress", "",
                 "Evaluated at each coarse update while the request waits for its completion condition.", ""]
@@ -549,11 +578,8 @@ def table_blocks_note() -> str:
     return "What every execution of the instruction does, whatever the row:"
 
 
-def interpretations_page(spec: ir.Spec, extra_uses: dict[str, list[Use]] | None = None) -> str:
-    """``extra_uses``: users outside the IR (the add-on instructions of ``spec/addons/``)."""
+def interpretations_page(spec: ir.Spec) -> str:
     uses = interpretation_uses(spec)
-    for k, more in sorted((extra_uses or {}).items()):
-        uses[k] = sorted(set(uses.get(k, [])) | set(more), key=lambda u: u.label)
     out = [GENERATED_NOTE, "", "# Interpretations", "",
            "Where the source documents are silent, garbled or contradict each other, the spec records "
            "what it chose and why. Each entry lists the spec elements that rely on it.", ""]
@@ -679,8 +705,7 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
     return "\n".join(out) + "\n"
 
 
-def index_page(spec: ir.Spec, *, scxml: bool, aoi_table: tuple[Sequence[str], Sequence[Sequence[str]]] | None = None) -> str:
-    """``aoi_table``: header and rows of the add-on instruction section (none: no section)."""
+def index_page(spec: ir.Spec, *, scxml: bool) -> str:
     out = [GENERATED_NOTE, "", "# motionchart reference", "",
            "Generated from the specification in `spec/`: state diagrams, instruction flowcharts, "
            "reference tables, the interpretations the spec relies on, the error-code catalog and a "
@@ -699,12 +724,12 @@ def index_page(spec: ir.Spec, *, scxml: bool, aoi_table: tuple[Sequence[str], Se
          f"`{spec_path(spec, i.location.file)}`"]
         for i in spec.instructions
     ])
-    if aoi_table is not None:
-        header, rows = aoi_table
+    if spec.add_ons:
+        from statecharts.render.addon import INDEX_HEADER, index_rows
         out += ["", "## Add-on instructions", "",
-                "Instructions defined in `spec/addons/` that call motion instructions (`spec/instructions/motion/`): "
-                "their ordered checks, error codes and recovery chart.", ""]
-        out += table(list(header), rows)
+                "Instructions with their own status tag whose recovery calls motion instructions: ordered checks, "
+                "error codes and recovery chart.", ""]
+        out += table(INDEX_HEADER, index_rows(spec))
     out += ["", "## Cross-references", "",
             f"- [Interpretations](interpretations.md): {len(spec.interpretations)} documented choices",
             f"- [Error codes](error-codes.md): {len(spec.errors)} generic codes, "
@@ -725,18 +750,11 @@ def index_page(spec: ir.Spec, *, scxml: bool, aoi_table: tuple[Sequence[str], Se
     return "\n".join(out) + "\n"
 
 
-def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool,
-                    aoi_table: tuple[Sequence[str], Sequence[Sequence[str]]] | None = None,
-                    extra_uses: dict[str, list[Use]] | None = None) -> dict[str, str]:
-    """Every Markdown page, keyed by its path relative to the output directory.
-
-    ``aoi_table`` and ``extra_uses`` come from :mod:`statecharts.render.aoi` (the index
-    section and the interpretation users of the add-on instructions); their own pages are
-    written there.
-    """
+def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool) -> dict[str, str]:
+    """Every Markdown page, keyed by its path relative to the output directory."""
     pages = {
-        "index.md": index_page(spec, scxml=scxml, aoi_table=aoi_table),
-        "interpretations.md": interpretations_page(spec, extra_uses),
+        "index.md": index_page(spec, scxml=scxml),
+        "interpretations.md": interpretations_page(spec),
         "error-codes.md": error_codes_page(spec, tr),
         "traceability.md": traceability_page(spec, tr),
     }
@@ -744,4 +762,8 @@ def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool,
         pages[f"charts/{c.id}.md"] = chart_page(spec, c, tr, scxml=scxml)
     for i in spec.instructions:
         pages[f"instructions/{i.id}.md"] = instruction_page(spec, i, tr)
+    if spec.add_ons:
+        from statecharts.render.addon import addon_page
+        for a in spec.add_ons:
+            pages[f"instructions/{a.id}.md"] = addon_page(spec, a, tr)
     return pages

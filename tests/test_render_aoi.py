@@ -196,16 +196,12 @@ def test_flowchart_has_one_decision_per_check_in_order(spec: ir.Spec, aoi: ir.Ad
         n.id for n in checks)
 
 
-def test_flowchart_ends_in_the_branches_of_the_recovery(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+def test_flowchart_ends_where_the_recovery_chart_takes_over(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
     fc = build_flowchart(spec, aoi)
-    nodes = {n.id: n for n in fc.nodes}
-    routes = [n for n in fc.nodes if n.id.startswith("route_")]
-    # 003 §1.3.2: Virtual mode first, then SyncType 0 (redefine), SyncType 1 (home if needed, move)
-    assert [n.title[0] for n in routes] == ["1. to virtual_done?", "2. to redefine?", "3. to homing?",
-                                            "4. to moving?"]
-    assert [e.target for e in fc.edges if e.source == "recovery"] == [routes[0].id]
-    calls = [nodes[e.target].detail for r in routes for e in fc.edges if e.source == r.id and e.label == "yes"]
-    assert calls[1][0].startswith("MRP_VIRTUAL(Ref_AxisPth") and calls[2][0].startswith("MAH_CIP(Ref_AxisPhy")
+    (last,) = [e for e in fc.edges if e.target == "recovery"]
+    assert last.source == f"check_{aoi.checks[-1].id}" and last.label == "no"
+    assert [n.kind for n in fc.nodes if n.id == "recovery"] == ["done"]
+    assert f"{AOI_ID}_recovery" in " ".join(fc.note)
     assert "flowchart TD" in instruction_mermaid(spec, aoi)
 
 
@@ -229,8 +225,10 @@ def test_recovery_chart_shows_every_state_transition_and_error_exit(spec: ir.Spe
     # the calls are in the state boxes, with the variant for the axis
     for variant in CALLED_VARIANTS.values():
         assert f"entry / {variant}(" in dot
-    # the try order of the branches out of `checking`
-    assert "[1: handler.mode == 'virtual']" in mmd and "[4: Cfg_SyncType == 1]" in mmd
+    # 003 §1.3.2: out of `checking`, Virtual mode first, then SyncType 0 (redefine), SyncType 1 (home if
+    # needed, then move), in this try order
+    branches = re.findall(r"checking --> (\w+) : \[(\d): ", mmd)
+    assert branches == [("virtual_done", "1"), ("redefine", "2"), ("homing", "3"), ("moving", "4")]
 
 
 def test_dot_is_deterministic(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
@@ -260,7 +258,7 @@ def test_build_writes_the_aoi_artefacts(tmp_path: Path, spec: ir.Spec, aoi: ir.A
         assert name in files, name
     assert files[f"flowcharts/{AOI_ID}.dot"].decode() == instruction_dot(spec, aoi)
     index = files["index.md"].decode()
-    assert f"[{AOI_ID}](instructions/{AOI_ID}.md)" in index and "## Add-on instructions" in index
+    assert f"[{AOI_ID}](instructions/{AOI_ID}.md)" in index and f"[recovery chart](diagrams/{AOI_ID}_recovery.svg)" in index
     interps = files["interpretations.md"].decode()
     assert f"](instructions/{AOI_ID}.md#check-energized)" in interps  # INT-022's user
     assert f"](instructions/{AOI_ID}.md#the-world-it-runs-in)" in interps  # INT-068's users

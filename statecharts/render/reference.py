@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from statecharts import ir
 from statecharts.render import views
@@ -139,8 +140,8 @@ def interpretation_uses(spec: ir.Spec) -> dict[str, list[Use]]:
     if spec.add_ons:
         from statecharts.render.addon import addon_uses
         for a in spec.add_ons:
-            for k, more in addon_uses(a).items():
-                uses.setdefault(k, []).extend(more)
+            for prov, label, link in addon_uses(a):
+                add(prov, label, link)
     return {k: sorted(set(v), key=lambda u: u.label) for k, v in sorted(uses.items())}
 
 
@@ -207,6 +208,14 @@ def transitions_table(spec: ir.Spec, chart: ir.Chart, p: str) -> list[str]:
         interp_link(t.provenance.interpretation, p),
         f"`{where(spec, t.location)}`",
     ] for t in chart.transitions])
+
+
+def sourced_table(spec: ir.Spec, header: Sequence[str], rows: Iterable[tuple[Sequence[str], Any]], p: str) -> list[str]:
+    """A table whose rows end with their record's source, interpretation and spec line
+    (``rows``: the leading cells and a record with ``provenance`` and ``location``)."""
+    return table([*header, "Source", "Interpretation", "Defined at"], [
+        [*cells, cell(r.provenance.source), interp_link(r.provenance.interpretation, p), f"`{where(spec, r.location)}`"]
+        for cells, r in rows])
 
 
 def variables_table(variables: Sequence[ir.Variable], p: str) -> list[str]:
@@ -718,18 +727,14 @@ def index_page(spec: ir.Spec, *, scxml: bool) -> str:
         for c in spec.charts
     ])
     out += ["", "## Instructions", ""]
+    recovery = {a.id: f" (add-on instruction; [recovery chart](diagrams/{a.id}_recovery.svg))" for a in spec.add_ons}
+    listed: list[ir.Instruction | ir.AddOnInstruction] = [*spec.instructions, *spec.add_ons]
     out += table(["Instruction", "Name", "Checks", "Flowchart", "Spec file"], [
-        [f"[{i.id}](instructions/{i.id}.md)", cell(i.name), str(len(i.checks)),
+        [f"[{i.id}](instructions/{i.id}.md)", cell(i.name) + recovery.get(i.id, ""), str(len(i.checks)),
          f"[svg](flowcharts/{i.id}.svg) · [dot](flowcharts/{i.id}.dot) · [mermaid](flowcharts/{i.id}.mmd)",
          f"`{spec_path(spec, i.location.file)}`"]
-        for i in spec.instructions
+        for i in listed
     ])
-    if spec.add_ons:
-        from statecharts.render.addon import INDEX_HEADER, index_rows
-        out += ["", "## Add-on instructions", "",
-                "Instructions with their own status tag whose recovery calls motion instructions: ordered checks, "
-                "error codes and recovery chart.", ""]
-        out += table(INDEX_HEADER, index_rows(spec))
     out += ["", "## Cross-references", "",
             f"- [Interpretations](interpretations.md): {len(spec.interpretations)} documented choices",
             f"- [Error codes](error-codes.md): {len(spec.errors)} generic codes, "

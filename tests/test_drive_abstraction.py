@@ -161,3 +161,25 @@ FIRED: set[str] = set()
 
 def test_the_scenarios_exercise_every_drive_event() -> None:
     assert set(drive.EVENTS) == FIRED
+
+
+def test_the_move_transitions_the_cip_explanations_send_to_the_motion_system_are_reached_there(spec: ir.Spec) -> None:
+    """spec/properties/cip.yaml explains AxisCIP's move transitions as explored by the
+    ``motion`` system (or as outside its operand choices); that claim is checked here:
+    the first group is reached by a full check of ``motion``, the second is not."""
+    from checker.coverage import table
+    from checker.search import explore
+
+    props = load_properties(spec)
+    cover = next(p for p in props if p.name == "cip_every_transition_taken")
+    in_motion = {u.item for u in cover.unreachable if "spec/systems/motion.yaml" in u.source}
+    model = Model(spec, load_system(bundled_systems()["motion"], spec), props)
+    r = explore(model, progress=False)
+    assert r.complete and not r.violations
+    reached = set(table(r, "transitions").reached)
+    moves = {"AxisCIP:" + t for t in ("mah", "homed", "mam", "move_done", "maj", "mas_all", "mas_move",
+                                      "stopping_done", "mrp")}
+    outside = {"AxisCIP:" + t for t in ("mam_merge", "maj_merge", "mag", "mas_jog", "mas_gear", "mas_home")}
+    assert moves | outside <= in_motion
+    assert moves <= reached, f"explained as reached by the motion system but not reached: {sorted(moves - reached)}"
+    assert not outside & reached, f"explained as outside the motion system but reached: {sorted(outside & reached)}"

@@ -31,10 +31,12 @@ not exhaustive: what it finds is real, a property it does not break is "unknown"
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
 import shutil
+import signal
 import struct
 import subprocess
 import sys
@@ -166,14 +168,36 @@ def parse_pan(text: str, workdir: Path) -> PanStats:
     return st
 
 
-def _run(cmd: list[str], cwd: Path, what: str, timeout: float | None = None) -> str:
+def _kill_group(p: subprocess.Popen[str], reap: bool = True) -> None:
+    """Stop ``p`` and every process of its group (its session), then reap ``p``."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(p.pid, signal.SIGKILL)
+    if reap:
+        with contextlib.suppress(subprocess.TimeoutExpired, ValueError, OSError):
+            p.communicate(timeout=5)
+
+
+def run_tool(cmd: list[str], cwd: Path, what: str, timeout: float | None = None) -> str:
+    """Run ``cmd`` in ``cwd`` and return its output; ``SpinError`` (naming ``what``) when it
+    cannot start, fails (except ``pan``, whose exit status its output explains) or outlasts
+    ``timeout`` seconds."""
+    # its own process group: pan's parallel search (-u N) forks workers, and a time-out
+    # must stop them all, not only the process that was started
     try:
-        p = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False)
-    except subprocess.TimeoutExpired as exc:
-        raise SpinError(f"{what} did not finish within {timeout:g} s") from exc
+        p = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
     except OSError as exc:
         raise SpinError(f"{what}: cannot run {cmd[0]}: {exc.strerror or exc}") from exc
-    out = (p.stdout or "") + (p.stderr or "")
+    try:
+        stdout, stderr = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired as exc:
+        _kill_group(p)
+        raise SpinError(f"{what} did not finish within {timeout:g} s") from exc
+    except BaseException:
+        _kill_group(p)
+        raise
+    _kill_group(p, reap=False)  # workers left behind by a finished search
+    out = (stdout or "") + (stderr or "")
     if p.returncode != 0 and what != "pan":
         tail = "\n".join(out.strip().splitlines()[-12:])
         raise SpinError(f"{what} failed (exit {p.returncode}):\n{tail}")
@@ -213,14 +237,14 @@ def compile_pan(pm: PromelaModel, workdir: Path, opts: SpinOptions, extra_flags:
     objects: list[str] = []
     if pm.tables is not None:
         (workdir / "model_tables.c").write_text(pm.tables, encoding="ascii")
-        _run([cc, "-c", "-O0", "-w", "-o", "model_tables.o", "model_tables.c"], workdir, "the C compiler (tables)")
+        run_tool([cc, "-c", "-O0", "-w", "-o", "model_tables.o", "model_tables.c"], workdir, "the C compiler (tables)")
         objects.append("model_tables.o")
-    _run([spin, "-a", "model.pml"], workdir, "spin -a")
+    run_tool([spin, "-a", "model.pml"], workdir, "spin -a")
     flags = opts.flags() + (extra_flags or [])
     vector = 16 + 6 * pm.core.naxes + len(pm.model.slots)
     if vector > 900:
         flags.append(f"-DVECTORSZ={vector + 128}")
-    _run([cc, *flags, "-o", "pan", "pan.c", *objects], workdir, "the C compiler")
+    run_tool([cc, *flags, "-o", "pan", "pan.c", *objects], workdir, "the C compiler")
     return workdir / "pan", flags, time.perf_counter() - t0
 
 
@@ -240,7 +264,7 @@ def run_pan(pan: Path, workdir: Path, opts: SpinOptions, pm: PromelaModel, extra
     import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = _run(args, workdir, "pan", timeout=None if opts.max_seconds is None else opts.max_seconds + 30)
+    out = run_tool(args, workdir, "pan", timeout=None if opts.max_seconds is None else opts.max_seconds + 30)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     st = parse_pan(out, workdir)
     st.cpu_seconds = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -258,7 +282,7 @@ def run_pan(pan: Path, workdir: Path, opts: SpinOptions, pm: PromelaModel, extra
 
 def replay_trail(pan: Path, workdir: Path, trail: Path) -> list[tuple[str, int, int]]:
     """The inputs of a trail: ("initial", j, 0), ("step", axis, local), ("prescan", 0, 0)."""
-    out = _run([str(pan), "-S", "-r", trail.name], workdir, "pan -r")
+    out = run_tool([str(pan), "-S", "-r", trail.name], workdir, "pan -r")
     steps: list[tuple[str, int, int]] = []
     for line in out.splitlines():
         parts = line.split()

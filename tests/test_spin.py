@@ -200,3 +200,16 @@ pan: elapsed time 0.6 seconds
     assert st.memory_mb == 132.0 and st.complete
     assert st.trails == [(2, tmp_path / "model.pml1.trail")]
     assert not spin.parse_pan(text + "error: max search depth too small\n", tmp_path).complete
+
+
+def test_a_time_out_stops_every_process_the_search_started(tmp_path: Path) -> None:
+    """pan's parallel search forks workers; a time-out must stop them too, not only the
+    process that was started (a left-over worker keeps a core and gigabytes busy)."""
+    import time
+
+    marker = "97.25"  # a sleep no other process runs
+    with pytest.raises(spin.SpinError, match="did not finish within"):
+        spin.run_tool(["sh", "-c", f"sleep {marker} & sleep {marker}"], tmp_path, "pan", timeout=0.5)
+    time.sleep(0.2)
+    left = subprocess.run(["ps", "-eo", "args"], capture_output=True, text=True, check=True).stdout
+    assert f"sleep {marker}" not in left

@@ -245,6 +245,10 @@ class CompiledModel:
         #: per axis: the base scan up to the deliveries (axis core, tags, events, tags
         #: scanned, tags watched) -> the moves of the environment events at the end of the choices
         self._event_moves: list[dict[tuple[object, ...], EventMoves]] = [{} for _ in model.axes]
+        #: per axis: (axis core, held events) -> (choice, core) of the trailing
+        #: environment events that change the core (_event_cores)
+        self._suffix_cores: list[dict[tuple[int, tuple[str, ...]], tuple[tuple[int, int], ...]]] = [
+            {} for _ in model.axes]
         self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
         self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
@@ -1271,18 +1275,16 @@ class CompiledModel:
         if ekey is not None:
             if hit is None:
                 n_out = len(out)
-                for c, _kind, _j, arg in suffix:
-                    self.where = (cur, c)
-                    assert type(arg) is str  # an EVENT choice's argument is its event name
-                    if events:
-                        core_e = self._apply_events(ai, core_m, (*events, arg))
-                    else:
-                        e = evmemo.get((core_m, arg))
-                        core_e = e if e is not None else self.piece_event(ai, core_m, arg)
-                    if core_e == core_b:
-                        continue  # the same scan as the base's
+                # the events that change the core, and the core each gives: a function
+                # of the core before them and the events held (memoised by those)
+                ck = (core_m, events)
+                moved = self._suffix_cores[ai].get(ck)
+                if moved is None:
+                    moved = self._event_cores(ai, core_m, events, core_b, suffix, cur, ck)
+                for c, core_e in moved:
                     te = inner.get(core_e)
                     if te is None:
+                        self.where = (cur, c)
                         te = self._tail_compute(ai, mid_t, core_e, order, w, inner)
                     if te[4] == base_blk and not te[2] and not te[3]:
                         continue
@@ -1302,6 +1304,31 @@ class CompiledModel:
             else:
                 self._block_memo[ai][key] = (base, out)
         return base, out
+
+    def _event_cores(self, ai: int, core: int, events: tuple[str, ...], core_b: int,
+                     suffix: tuple[Choice, ...], cur: int, key: tuple[int, tuple[str, ...]]
+                     ) -> tuple[tuple[int, int], ...]:
+        """(choice, axis core) for each trailing environment event of ``suffix`` that,
+        applied after the held ``events`` to axis core ``core``, gives another core than
+        the held events alone (``core_b``); memoised by ``key``, (core, events).  The
+        trailing environment events are the axis's own, the same in every context."""
+        out: list[tuple[int, int]] = []
+        evmemo = self._event[ai]
+        for c, _kind, _j, arg in suffix:
+            self.where = (cur, c)
+            assert type(arg) is str  # an EVENT choice's argument is its event name
+            if events:
+                core_e = self._apply_events(ai, core, (*events, arg))
+            else:
+                e = evmemo.get((core, arg))
+                core_e = e if e is not None else self.piece_event(ai, core, arg)
+            if core_e != core_b:
+                out.append((c, core_e))
+        memo = self._suffix_cores[ai]
+        if len(memo) > 300_000:  # bounded: a cache, not state
+            memo.clear()
+        r = memo[key] = tuple(out)
+        return r
 
     def _drive_core(self, ai: int, core: int, events: tuple[str, ...]) -> int:
         """The drive events among ``events`` applied to the ticked core ``core``, in the

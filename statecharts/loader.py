@@ -338,8 +338,10 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
     if raw is None:
         return None
+    # the bundled spec's trees are kept; any file with the same bytes (a copy of one)
+    # is read from that entry
     cacheable = _in_bundled_spec(path)
-    if cacheable and _remembered_tree(name, raw) is None:
+    if _remembered_tree(name, raw) is None:
         from statecharts import tree_cache
 
         cached = tree_cache.load(raw)
@@ -416,9 +418,11 @@ _trees_bytes = 0
 
 
 def forget_trees() -> None:
-    """Empty the in-process memo of parsed trees (the next load parses or reads the disk cache)."""
+    """Empty the in-process memos of parsed trees and of documents found valid (the next
+    load parses and checks, or reads the disk cache)."""
     global _trees_bytes
     _TREES.clear()
+    _VALID_DOCUMENTS.clear()
     _trees_bytes = 0
 
 
@@ -686,6 +690,12 @@ def schema_diagnostics(
         key = None
     if key is not None and key in _VALID_DOCUMENTS:
         return []
+    from statecharts import tree_cache
+
+    schema_text = _schema_text(schema)
+    if key is not None and tree_cache.known_valid(schema_text, key[1]):
+        _VALID_DOCUMENTS.add(key)
+        return []
     out = []
     for err in validator.iter_errors(plain):
         parts = tuple(err.absolute_path)
@@ -714,7 +724,23 @@ def schema_diagnostics(
         if len(_VALID_DOCUMENTS) > 512:
             _VALID_DOCUMENTS.clear()
         _VALID_DOCUMENTS.add(key)
+        tree_cache.remember_valid(schema_text, key[1])
     return out
+
+
+_SCHEMA_TEXTS: dict[int, tuple[dict[str, Any], str]] = {}
+
+
+def _schema_text(schema: dict[str, Any]) -> str:
+    """A schema as canonical JSON (kept per schema object)."""
+    hit = _SCHEMA_TEXTS.get(id(schema))
+    if hit is not None and hit[0] is schema:
+        return hit[1]
+    text = json.dumps(schema, sort_keys=True, default=repr)
+    if len(_SCHEMA_TEXTS) > 16:
+        _SCHEMA_TEXTS.clear()
+    _SCHEMA_TEXTS[id(schema)] = (schema, text)
+    return text
 
 
 #: The Logix DINT range: ERR, EXERR, state values and integer tag values are DINTs.

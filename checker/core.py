@@ -272,6 +272,11 @@ class CompiledModel:
         for g, group in enumerate(self.symmetric_groups):
             for ai in group:
                 self._group_of[ai] = g
+        # every axis in one group of interchangeable one-slot blocks, no prescan choice:
+        # a state is the phase then the sorted axis parts (_flat_successors)
+        groups = self.symmetric_groups
+        self._flat = (not self.has_prescan and len(groups) == 1 and len(groups[0]) == self.naxes > 1
+                      and all(n == 1 for n in self.block_len))
 
     # ------------------------------------------------------------------ interning
 
@@ -1411,6 +1416,41 @@ class CompiledModel:
             self._block_memo[self._leader[ai]].clear()
         memo[key] = value
 
+    def _flat_successors(self, state: State, mode: int, nphase: int
+                         ) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
+        """:meth:`successors` when every axis is one interchangeable one-slot block: the
+        state's axis parts are sorted, so equal parts are neighbours and only the first of
+        each run is expanded, and a successor is the phase then the parts sorted."""
+        own = self._own_memo
+        rest: list[int] = []
+        base_bad: list[Property] = []
+        base_good: list[Property] = []
+        expand: list[tuple[int, Moves]] = []
+        prev = -1
+        for ai in range(self.naxes):
+            v = state[ai + 1]
+            r = own[ai].get(((v,), mode))
+            if r is None:
+                r = self.moves(ai, state, mode)
+            (blk, bad, good), mv = r
+            rest.append(blk[0])
+            if bad:
+                base_bad.extend(bad)
+            if good:
+                base_good.extend(good)
+            if mv and v != prev:
+                expand.append((ai, mv))
+            prev = v
+        out: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+            (self.nothing_index, (nphase, *sorted(rest)), base_bad, base_good)]
+        for ai, mv in expand:
+            for c, blk, bad, good in mv:
+                v2 = rest.copy()
+                v2[ai] = blk[0]
+                v2.sort()
+                out.append((c, (nphase, *v2), bad, good))
+        return out
+
     def successors(self, state: State) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
         """(choice index, canonical successor, violated, reached) for the enabled choices.
 
@@ -1436,6 +1476,8 @@ class CompiledModel:
                 a2, t2, pb, pg = self.prescan_block(0, state[1], state[2:1 + n])
                 out1.append((self.prescan_index, (nphase, a2, *t2), pb, pg))
             return out1
+        if self._flat:
+            return self._flat_successors(state, mode, nphase)
         busy = False
         vec = [nphase]
         base_bad: list[Property] = []

@@ -338,9 +338,9 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
     if raw is None:
         return None
-    # the bundled spec's trees are kept; any file with the same bytes (a copy of one)
-    # is read from that entry
-    cacheable = _in_bundled_spec(path)
+    # the project's own files' trees are kept; any file with the same bytes (a copy of
+    # one) is read from that entry
+    cacheable = _project_file(path)
     if _remembered_tree(name, raw) is None:
         from statecharts import tree_cache
 
@@ -357,10 +357,23 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     return tree
 
 
-def _in_bundled_spec(path: Path) -> bool:
-    """Whether ``path`` is a file of the bundled spec (whose parsed trees are cached on disk)."""
+@functools.lru_cache(maxsize=1)
+def _project_dirs() -> tuple[Path, ...]:
+    """The folders of the project's own YAML files: the bundled spec, the bundled
+    conformance systems and, in a checkout, the scenarios."""
+    spec = bundled_spec_dir().resolve()
+    out = [spec, (Path(__file__).resolve().parent.parent / "conformance" / "systems")]
+    scenarios = spec.parent / "scenarios"
+    if scenarios.is_dir():
+        out.append(scenarios)
+    return tuple(out)
+
+
+def _project_file(path: Path) -> bool:
+    """Whether ``path`` is one of the project's own files (whose parsed trees are cached on disk)."""
     try:
-        return bundled_spec_dir().resolve() in Path(path).resolve().parents
+        parents = Path(path).resolve().parents
+        return any(d in parents for d in _project_dirs())
     except (OSError, ModuleNotFoundError):  # pragma: no cover - package data missing
         return False
 

@@ -2,10 +2,11 @@
 
 Parsing YAML with positions (ruamel's round-trip loader, pure Python) is most of what a
 short command such as ``motionchart diagram`` spends its time on.  The trees of the
-bundled spec's files are therefore kept on disk, as JSON, keyed by the SHA-256 of the
-file's bytes (and of the ruamel version and this format): a changed file simply misses,
-and any file with the same bytes as a bundled one (a copy of the spec, as a user makes
-to change one file) is read from that entry.  Only the bundled spec's files are stored.
+project's own files (the bundled spec, the bundled conformance systems, the scenarios
+of a checkout) are therefore kept on disk, as JSON, keyed by the SHA-256 of the file's
+bytes (and of the ruamel version and this format): a changed file simply misses, and any
+file with the same bytes as a kept one (a copy of the spec, as a user makes to change
+one file) is read from that entry.  Only the project's own files are stored.
 
 What is kept is what the loader reads: mappings and sequences with their line/column
 positions (``lc``), string keys, and scalars as plain ``str``/``int``/``float``/``bool``/
@@ -32,7 +33,7 @@ import ruamel.yaml
 from ruamel.yaml.comments import CommentedMap, CommentedSeq
 
 FORMAT = "motionchart-tree/1"
-MAX_ENTRIES = 400
+MAX_ENTRIES = 1000
 SUBDIR = "trees"
 
 

@@ -30,6 +30,7 @@ import functools
 import itertools
 import json
 import math
+import os
 import re
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
@@ -431,11 +432,12 @@ _trees_bytes = 0
 
 
 def forget_trees() -> None:
-    """Empty the in-process memos of parsed trees and of documents found valid (the next
-    load parses and checks, or reads the disk cache)."""
+    """Empty the in-process memos of parsed trees, of documents found valid and of built
+    specs (the next load parses, checks and builds, or reads the disk cache)."""
     global _trees_bytes
     _TREES.clear()
     _VALID_DOCUMENTS.clear()
+    _SPECS.clear()
     _trees_bytes = 0
 
 
@@ -1527,11 +1529,58 @@ def _hint(name: str, known: Iterable[str]) -> str:
 # --------------------------------------------------------------------------- entry point
 
 
+#: specs built in this process, by what they were built from (_spec_key); the IR is
+#: frozen, so one Spec object serves every load of the same files
+_SPECS: dict[tuple[object, ...], ir.Spec] = {}
+
+
+def _spec_key(paths: Sequence[Path | str] | None, files: Sequence[Path]) -> tuple[object, ...] | None:
+    """What a load of ``files`` depends on: the paths as given, each file's bytes (as a
+    digest) and the working directory; None (no memo) unless every file is a regular file
+    within the size limit (anything else is the load's to report: a FIFO or a device is
+    never read here)."""
+    import hashlib
+    import stat
+
+    digests = []
+    for f in files:
+        try:
+            st = os.stat(f)
+            if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_FILE_BYTES:
+                return None
+            with open(f, "rb") as fh:
+                raw = fh.read(MAX_FILE_BYTES + 1)
+        except OSError:
+            return None
+        if len(raw) > MAX_FILE_BYTES:
+            return None
+        digests.append(hashlib.sha256(raw).digest())
+    given = None if paths is None else tuple(str(p) for p in paths)
+    return (given, tuple(str(f) for f in files), tuple(digests), os.getcwd())
+
+
 def load_spec(paths: Sequence[Path | str] | None = None) -> ir.Spec:
-    """Load, validate and build the specification; raise SpecError with every problem found."""
+    """Load, validate and build the specification; raise SpecError with every problem found.
+
+    A spec built from the same files (same bytes) earlier in this process is returned
+    again (:func:`forget_trees` forgets them)."""
+    all_paths = spec_files(paths)
+    key = _spec_key(paths, all_paths)
+    if key is not None:
+        hit = _SPECS.get(key)
+        if hit is not None:
+            return hit
+    spec = _load_spec(paths, all_paths)
+    if key is not None and _spec_key(paths, all_paths) == key:  # no file changed meanwhile
+        if len(_SPECS) > 8:
+            _SPECS.clear()
+        _SPECS[key] = spec
+    return spec
+
+
+def _load_spec(paths: Sequence[Path | str] | None, all_paths: list[Path]) -> ir.Spec:
     errors: list[Diagnostic] = []
     documents: list[tuple[str, Any]] = []
-    all_paths = spec_files(paths)
     registry, registry_errors = sources.registry_for(all_paths)
     side: list[tuple[str, Any]] = []
     for path in all_paths:

@@ -43,6 +43,7 @@ Example::
 from __future__ import annotations
 
 import functools
+import operator
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from typing import cast
@@ -70,6 +71,16 @@ class CompiledTransition:
     event: str | None
     guard: Callable[[Mapping[str, object]], object] | None
     actions: tuple[Action, ...]
+
+
+def _tuple_getter(names: tuple[str, ...]) -> Callable[[Mapping[str, object]], tuple[object, ...]]:
+    """A function giving the values of ``names`` in a mapping, as a tuple, in one C call."""
+    if len(names) > 1:
+        return cast("Callable[[Mapping[str, object]], tuple[object, ...]]", operator.itemgetter(*names))
+    if names:
+        get = operator.itemgetter(names[0])
+        return lambda env: (get(env),)
+    return lambda env: ()
 
 
 def _actions(assignments: Iterable[Assignment]) -> tuple[Action, ...]:
@@ -103,6 +114,8 @@ class CompiledChart:
         self.has_history = any(s.kind is ir.StateKind.HISTORY for s in chart.states)
         self.atomic = frozenset(s.id for s in chart.states if s.kind in (ir.StateKind.ATOMIC, ir.StateKind.FINAL))
         self.variables = tuple(v.name for v in chart.variables)
+        #: the variables' values out of an environment, as a tuple (snapshot's hot path)
+        self.values_of: Callable[[Mapping[str, object]], tuple[object, ...]] = _tuple_getter(self.variables)
         indexed = sorted(enumerate(chart.transitions), key=lambda it: (it[1].priority, it[0]))
         table: dict[tuple[str, str | None], list[CompiledTransition]] = {}
         by_index: dict[int, CompiledTransition] = {}
@@ -280,6 +293,7 @@ class FastAxis:
         self.name = name
         self.c = compiled(chart)
         self.env = initial_env(chart, parameters)
+        self._axis_keys: tuple[str, ...] = ()
         self.history: dict[str, frozenset[str]] = {}
         #: when a list, the ids of the transitions taken are appended to it
         self.fired: list[str] | None = None
@@ -345,7 +359,11 @@ class FastAxis:
         return out
 
     def expression_env(self) -> dict[str, object]:
-        env: dict[str, object] = {f"axis.{k}": v for k, v in self.env.items()}
+        own = self.env
+        keys = self._axis_keys
+        if len(keys) != len(own):  # the environment only gains names, in order
+            keys = self._axis_keys = tuple(f"axis.{k}" for k in own)
+        env: dict[str, object] = dict(zip(keys, own.values()))
         leaf = self.c.leaf(self.config)
         env["axis.active"] = self.config
         env["axis.state"] = leaf.id
@@ -356,17 +374,14 @@ class FastAxis:
     def snapshot(self) -> tuple[object, ...]:
         """(configuration, variable values) -- plus the history memory when the chart has
         history states.  Same shape as :meth:`AxisInstance.snapshot` for charts without."""
-        env = self.env
-        values = tuple([env[v] for v in self.c.variables])
+        values = self.c.values_of(self.env)
         if self.c.has_history:
             return self.config, values, tuple(sorted(self.history.items()))
         return self.config, values
 
     def restore(self, snap: tuple[object, ...]) -> None:
         self.config = self.c.intern(cast("frozenset[str]", snap[0]))
-        env = self.env
-        for v, value in zip(self.c.variables, cast("tuple[object, ...]", snap[1])):
-            env[v] = value
+        self.env.update(zip(self.c.variables, cast("tuple[object, ...]", snap[1])))
         if self.c.has_history:
             self.history = dict(cast("tuple[tuple[str, frozenset[str]], ...]", snap[2])) if len(snap) > 2 else {}
 

@@ -87,6 +87,11 @@ BlockStep = tuple[tuple[int, ...], list["Property"], list["Property"]]
 Moves = list[tuple[int, tuple[int, ...], list["Property"], list["Property"]]]
 #: the moves of the environment events at the end of a block's choices (kept in a memo)
 EventMoves = tuple[tuple[int, tuple[int, ...], list["Property"], list["Property"]], ...]
+#: a choice offered: (choice, kind, local tag, argument)
+Choice = tuple[int, int, int, object]
+#: what a block's context decides (CompiledModel._ctx_memo)
+Context = tuple[tuple[int, ...], tuple[int, ...], tuple[Choice, ...], tuple[tuple[str, int, frozenset[int]], ...],
+                int, tuple[str, ...], dict[int, tuple[Choice, ...]]]
 _NONE: tuple[Property, ...] = ()
 
 
@@ -214,10 +219,13 @@ class CompiledModel:
             self._views.append(v[1])
             self._view_core.append(v[2])
         self._inert: list[dict[int, bool]] = [{} for _ in model.slots]
-        # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered)
-        self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], tuple[
-            tuple[int, ...], tuple[int, ...], tuple[tuple[int, int, int, object], ...],
-            tuple[tuple[str, int, frozenset[int]], ...], int]]] = [{} for _ in model.axes]
+        # per axis: (queue, tag parts) -> (active tags, watched tags, choices offered, the
+        # drive events offered with the choices that give each, where the trailing
+        # environment events start, the drive events offered, and the choices to scan by
+        # which of those drive events are idle (a bit each; -1 outside a coarse update))
+        self._ctx_memo: list[dict[tuple[tuple[int, ...], tuple[int, ...]], Context]] = [{} for _ in model.axes]
+        #: per axis: (axis part, drive events offered) -> which of them are idle (_idle_drive)
+        self._idle_memo: list[dict[tuple[int, tuple[str, ...]], int]] = [{} for _ in model.axes]
         self._tail_memo: list[dict[tuple[object, ...], dict[int, tuple[
             int, tuple[int, ...], list[Property], list[Property], tuple[int, ...]]]]] = [{} for _ in model.axes]
         self._exec_by_view: list[dict[tuple[int, tuple[object, ...]], tuple[int, bool]]] = [{} for _ in model.slots]
@@ -237,6 +245,10 @@ class CompiledModel:
         #: per axis: the base scan up to the deliveries (axis core, tags, events, tags
         #: scanned, tags watched) -> the moves of the environment events at the end of the choices
         self._event_moves: list[dict[tuple[object, ...], EventMoves]] = [{} for _ in model.axes]
+        #: per axis: (axis core, held events) -> (choice, core) of the trailing
+        #: environment events that change the core (_event_cores)
+        self._suffix_cores: list[dict[tuple[int, tuple[str, ...]], tuple[tuple[int, int], ...]]] = [
+            {} for _ in model.axes]
         self._block_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
         self.use_block_memo = self.naxes > 1
         self._own_memo: list[dict[tuple[object, ...], tuple[BlockStep, Moves]]] = [{} for _ in model.axes]
@@ -260,6 +272,11 @@ class CompiledModel:
         for g, group in enumerate(self.symmetric_groups):
             for ai in group:
                 self._group_of[ai] = g
+        # every axis in one group of interchangeable one-slot blocks, no prescan choice:
+        # a state is the phase then the sorted axis parts (_flat_successors)
+        groups = self.symmetric_groups
+        self._flat = (not self.has_prescan and len(groups) == 1 and len(groups[0]) == self.naxes > 1
+                      and all(n == 1 for n in self.block_len))
 
     # ------------------------------------------------------------------ interning
 
@@ -876,14 +893,25 @@ class CompiledModel:
             h = (*h, arg)
         if extra is not None:
             h = (*h, extra)
-        rung = self._rung
-        pending = self._pending
-        rows = self._rows
         # 2. program, in program order
+        q, _acc = self._step2(ai, tags, order, core, q, mode == PRESCAN)
+        if mode != COARSE:
+            return core, q, h, (), order, watch
+        core, events = self._step3(ai, core, q, h, tags, order)
+        return core, (), (), events, order, watch
+
+    def _step2(self, ai: int, tags: list[int], order: tuple[int, ...], core: int, q: tuple[int, ...],
+               prescan: bool) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """Step 2 of a scan, the program: the rows of the tags of ``order`` in program
+        order (``tags`` changed in place); (queue after it, tags whose request was accepted)."""
+        tis = self.tis[ai]
+        rung = self._rung
+        rows = self._rows
+        acc: tuple[int, ...] = ()
         for j in order:
             ti = tis[j]
             tid = tags[j]
-            cond = 2 if mode == PRESCAN else (1 if rung[tid] else 0)
+            cond = 2 if prescan else (1 if rung[tid] else 0)
             rr = rows[ti].get(tid * 3 + cond)
             if rr is None:
                 rr = self.piece_row(ti, tid, cond)
@@ -895,10 +923,76 @@ class CompiledModel:
                 tid, accepted = ex
                 if accepted:
                     q = (*(x for x in q if x != j), j)
+                    acc = (*acc, j)
             tags[j] = tid
-        if mode != COARSE:
-            return core, q, h, (), order, watch
-        # 3. coarse update, up to the deliveries
+        return q, acc
+
+    def _choice_coarse(self, ai: int, aid: int, tags: Sequence[int], s2: tuple[int, ...], acc: tuple[int, ...],
+                       kind: int, k: int, arg: object, active: tuple[int, ...], watch: tuple[int, ...]
+                       ) -> tuple[int, list[int], tuple[str, ...], tuple[int, ...], tuple[int, ...]]:
+        """Steps 1 to 3 up to the deliveries of a coarse-update scan under a choice that
+        is not a held environment event, the program's step reused from the base scan:
+        in step 2 a tag's row is a function of its own part and the axis core, which
+        step 2 leaves alone, so only tag ``k`` (the one the choice touches) is scanned
+        anew.  ``tags`` are the parts before the scan, ``s2`` after the base scan's step
+        2, ``acc`` the tags whose request the base scan accepted.  Returns (axis core, tag
+        parts, events to apply now, tags scanned, tags watched), as :meth:`_prefix`."""
+        core, q, h = self._split[aid]
+        extra: str | None = None
+        if kind >= WITH_DRIVE:
+            kind -= WITH_DRIVE
+            assert type(arg) is tuple  # a combined choice's argument is (base argument, drive event)
+            arg, extra = arg
+        tl = list(s2)
+        if kind == EVENT:
+            assert type(arg) is str  # an EVENT choice's argument is its event name
+            order = active
+            h = (*h, arg)
+            for j in acc:
+                q = (*(x for x in q if x != j), j)
+        else:
+            order = active if k in active else tuple(sorted((*active, k)))
+            if k in watch:
+                watch = tuple(x for x in watch if x != k)
+            ti = self.tis[ai][k]
+            tid = tags[k]
+            if kind == RAISE:
+                assert type(arg) is int  # a RAISE choice's argument is its operand index
+                r = self._raise[ti].get((tid, arg))
+                tid = r if r is not None else self.piece_raise(ti, tid, arg)
+            else:
+                r = self._drop[ti].get(tid)
+                tid = r if r is not None else self.piece_drop(ti, tid)
+            cond = 1 if self._rung[tid] else 0
+            rr = self._rows[ti].get(tid * 3 + cond)
+            if rr is None:
+                rr = self.piece_row(ti, tid, cond)
+            tid, executes = rr
+            acc_k = False
+            if executes:
+                ex = self._exec[ti].get((tid, core))
+                if ex is None:
+                    ex = self.piece_exec(ti, ai, tid, core)
+                tid, acc_k = ex
+            tl[k] = tid
+            if acc:
+                for j in order:
+                    if (acc_k if j == k else j in acc):
+                        q = (*(x for x in q if x != j), j)
+            elif acc_k:
+                q = (*(x for x in q if x != k), k)
+        if extra is not None:
+            h = (*h, extra)
+        core, events = self._step3(ai, core, q, h, tl, order)
+        return core, tl, events, order, watch
+
+    def _step3(self, ai: int, core: int, q: tuple[int, ...], h: tuple[str, ...], tags: list[int],
+               order: tuple[int, ...]) -> tuple[int, tuple[str, ...]]:
+        """Step 3 of a coarse-update scan up to the deliveries (tick, the drive model's
+        outcomes, finishing, queued requests; ``tags`` changed in place): (axis core, the
+        held environment events still to apply)."""
+        tis = self.tis[ai]
+        pending = self._pending
         events = h
         t = self._tick[ai].get(core)
         core = t if t is not None else self.piece_tick(ai, core)
@@ -925,7 +1019,7 @@ class CompiledModel:
                 if d is None:
                     d = self.piece_deliver(ti, ai, tid, core)
                 tags[j], core = d
-        return core, (), (), events, order, watch
+        return core, events
 
     def _apply_events(self, ai: int, core: int, events: tuple[str, ...]) -> int:
         """Step 3, the held environment events applied in order to axis core ``core``."""
@@ -1069,16 +1163,26 @@ class CompiledModel:
             esplit = len(chs)
             while esplit > 0 and chs[esplit - 1][1] == EVENT and chs[esplit - 1][3] not in self._drive[ai]:
                 esplit -= 1
-            cc = (*self.context(ai, state), chs, self._drive_firsts(ai, chs), esplit)
+            firsts0 = self._drive_firsts(ai, chs)
+            cc = (*self.context(ai, state), chs, firsts0, esplit, tuple(d for d, _f, _w in firsts0), {})
             self._ctx_memo[ai][ckey] = cc
-        active, watch, choices, firsts, esplit = cc
+        active, watch, choices, firsts, esplit, dnames, scanned = cc
         cur = self.current
         self.where = (cur, self.nothing_index)
         # the base (no input); an event choice shares its steps 1 to 3 up to the
         # deliveries (an event is only held in step 1), so those are scanned once
         mid = list(tags)
-        core_m, q_m, h_m, events, order, w = self._prefix(ai, aid, mid, mode, NOTHING, 0, None, active, watch)
         coarse = mode == COARSE
+        s2: tuple[int, ...] = ()
+        acc: tuple[int, ...] = ()
+        if coarse:
+            core_m, q_m, h_m = self._split[aid]
+            q_m, acc = self._step2(ai, mid, active, core_m, q_m, False)
+            s2 = tuple(mid)
+            core_m, events = self._step3(ai, core_m, q_m, h_m, mid, active)
+            order, w = active, watch
+        else:
+            core_m, q_m, h_m, events, order, w = self._prefix(ai, aid, mid, mode, NOTHING, 0, None, active, watch)
         t2: Sequence[int]
         if coarse:
             core_b = self._apply_events(ai, core_m, events) if events else core_m
@@ -1098,9 +1202,21 @@ class CompiledModel:
         out = []
         evmemo = self._event[ai]
         drive_events = self._drive[ai]
-        idle: frozenset[int] = frozenset()
-        if coarse and firsts:
-            idle = self._idle_drive(ai, aid, firsts, cur)
+        # the choices scanned one by one: at a coarse update, those before the trailing
+        # environment events, less the ones whose drive event leaves the ticked core as
+        # it is (their scan is their base choice's, or the nothing choice's, which comes
+        # earlier); the drive events' idleness is a function of the axis part, memoised
+        mask = -1
+        if coarse:
+            mask = 0
+            if firsts:
+                ik = (aid, dnames)
+                im = self._idle_memo[ai].get(ik)
+                mask = im if im is not None else self._idle_mask(ai, aid, firsts, cur, ik)
+        todo = scanned.get(mask)
+        if todo is None:
+            todo = self._scanned(choices, esplit, firsts, mask)
+            scanned[mask] = todo
         # the environment events at the end of the choices: at a coarse update their
         # moves are a function of the base scan up to the deliveries, memoised by it
         ekey: tuple[object, ...] | None = None
@@ -1111,12 +1227,8 @@ class CompiledModel:
             hit = self._event_moves[ai].get(ekey)
             if hit is None:
                 suffix = choices[esplit:]
-            choices = choices[:esplit]
-        for c, kind, k, arg in choices:
-            if idle and c in idle:
-                # a drive event that leaves the ticked core as it is: the choice's scan
-                # is its base choice's (or the nothing choice's), which comes earlier
-                continue
+        tail_memo = self._tail_memo[ai]
+        for c, kind, k, arg in todo:
             self.where = (cur, c)
             # a drive event acts right after the tick, before the deliveries: no shortcut
             if kind == EVENT and arg not in drive_events:
@@ -1145,11 +1257,16 @@ class CompiledModel:
                     continue
             elif coarse:
                 # the end of the scan comes from the tail memo with its block
-                tl = list(tags)
-                mc, _q, _h, evs, order_c, watch_c = self._prefix(ai, aid, tl, mode, kind, k, arg, active, watch)
+                mc, tl, evs, order_c, watch_c = self._choice_coarse(ai, aid, tags, s2, acc, kind, k, arg, active, watch)
                 if evs:
                     mc = self._apply_events(ai, mc, evs)
-                te = self._tail(ai, tl, mc, order_c, watch_c)
+                tkey = (tuple(tl), order_c, watch_c)
+                tinner = tail_memo.get(tkey)
+                if tinner is None:
+                    tinner = self._tail_inner(ai, tkey[0], order_c, watch_c)
+                te = tinner.get(mc)
+                if te is None:
+                    te = self._tail_compute(ai, tkey[0], mc, order_c, watch_c, tinner)
                 if te[4] == base_blk and not te[2] and not te[3]:
                     continue
                 out.append((c, te[4], te[2], te[3]))
@@ -1163,18 +1280,16 @@ class CompiledModel:
         if ekey is not None:
             if hit is None:
                 n_out = len(out)
-                for c, _kind, _j, arg in suffix:
-                    self.where = (cur, c)
-                    assert type(arg) is str  # an EVENT choice's argument is its event name
-                    if events:
-                        core_e = self._apply_events(ai, core_m, (*events, arg))
-                    else:
-                        e = evmemo.get((core_m, arg))
-                        core_e = e if e is not None else self.piece_event(ai, core_m, arg)
-                    if core_e == core_b:
-                        continue  # the same scan as the base's
+                # the events that change the core, and the core each gives: a function
+                # of the core before them and the events held (memoised by those)
+                ck = (core_m, events)
+                moved = self._suffix_cores[ai].get(ck)
+                if moved is None:
+                    moved = self._event_cores(ai, core_m, events, core_b, suffix, cur, ck)
+                for c, core_e in moved:
                     te = inner.get(core_e)
                     if te is None:
+                        self.where = (cur, c)
                         te = self._tail_compute(ai, mid_t, core_e, order, w, inner)
                     if te[4] == base_blk and not te[2] and not te[3]:
                         continue
@@ -1194,6 +1309,31 @@ class CompiledModel:
             else:
                 self._block_memo[ai][key] = (base, out)
         return base, out
+
+    def _event_cores(self, ai: int, core: int, events: tuple[str, ...], core_b: int,
+                     suffix: tuple[Choice, ...], cur: int, key: tuple[int, tuple[str, ...]]
+                     ) -> tuple[tuple[int, int], ...]:
+        """(choice, axis core) for each trailing environment event of ``suffix`` that,
+        applied after the held ``events`` to axis core ``core``, gives another core than
+        the held events alone (``core_b``); memoised by ``key``, (core, events).  The
+        trailing environment events are the axis's own, the same in every context."""
+        out: list[tuple[int, int]] = []
+        evmemo = self._event[ai]
+        for c, _kind, _j, arg in suffix:
+            self.where = (cur, c)
+            assert type(arg) is str  # an EVENT choice's argument is its event name
+            if events:
+                core_e = self._apply_events(ai, core, (*events, arg))
+            else:
+                e = evmemo.get((core, arg))
+                core_e = e if e is not None else self.piece_event(ai, core, arg)
+            if core_e != core_b:
+                out.append((c, core_e))
+        memo = self._suffix_cores[ai]
+        if len(memo) > 300_000:  # bounded: a cache, not state
+            memo.clear()
+        r = memo[key] = tuple(out)
+        return r
 
     def _drive_core(self, ai: int, core: int, events: tuple[str, ...]) -> int:
         """The drive events among ``events`` applied to the ticked core ``core``, in the
@@ -1216,6 +1356,36 @@ class CompiledModel:
             if with_d:
                 out.append((d, with_d[0], frozenset(with_d)))
         return tuple(out)
+
+    def _idle_mask(self, ai: int, aid: int, firsts: tuple[tuple[str, int, frozenset[int]], ...], cur: int,
+                   key: tuple[int, tuple[str, ...]]) -> int:
+        """Which of the drive events of ``firsts`` are idle in a coarse-update scan of axis
+        part ``aid`` (bit ``i`` for ``firsts[i]``; see :meth:`_idle_drive`), memoised by
+        ``key``, (axis part, drive events offered)."""
+        idle = self._idle_drive(ai, aid, firsts, cur)
+        mask = 0
+        for i, (_d, _first, with_d) in enumerate(firsts):
+            if with_d <= idle:
+                mask |= 1 << i
+        memo = self._idle_memo[ai]
+        if len(memo) > 300_000:  # bounded: a cache, not state
+            memo.clear()
+        memo[key] = mask
+        return mask
+
+    @staticmethod
+    def _scanned(choices: tuple[Choice, ...], esplit: int, firsts: tuple[tuple[str, int, frozenset[int]], ...],
+                 mask: int) -> tuple[Choice, ...]:
+        """The choices :meth:`moves` scans one by one: all of them outside a coarse update
+        (``mask`` -1), else those before ``esplit`` less the ones giving an idle drive
+        event (bit ``i`` of ``mask`` for ``firsts[i]``)."""
+        if mask < 0:
+            return choices
+        idle: frozenset[int] = frozenset()
+        for i, (_d, _first, with_d) in enumerate(firsts):
+            if mask >> i & 1:
+                idle = idle | with_d
+        return tuple(ch for ch in choices[:esplit] if ch[0] not in idle)
 
     def _idle_drive(self, ai: int, aid: int, firsts: tuple[tuple[str, int, frozenset[int]], ...], cur: int
                     ) -> frozenset[int]:
@@ -1246,6 +1416,41 @@ class CompiledModel:
             self._block_memo[self._leader[ai]].clear()
         memo[key] = value
 
+    def _flat_successors(self, state: State, mode: int, nphase: int
+                         ) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
+        """:meth:`successors` when every axis is one interchangeable one-slot block: the
+        state's axis parts are sorted, so equal parts are neighbours and only the first of
+        each run is expanded, and a successor is the phase then the parts sorted."""
+        own = self._own_memo
+        rest: list[int] = []
+        base_bad: list[Property] = []
+        base_good: list[Property] = []
+        expand: list[tuple[int, Moves]] = []
+        prev = -1
+        for ai in range(self.naxes):
+            v = state[ai + 1]
+            r = own[ai].get(((v,), mode))
+            if r is None:
+                r = self.moves(ai, state, mode)
+            (blk, bad, good), mv = r
+            rest.append(blk[0])
+            if bad:
+                base_bad.extend(bad)
+            if good:
+                base_good.extend(good)
+            if mv and v != prev:
+                expand.append((ai, mv))
+            prev = v
+        out: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = [
+            (self.nothing_index, (nphase, *sorted(rest)), base_bad, base_good)]
+        for ai, mv in expand:
+            for c, blk, bad, good in mv:
+                v2 = rest.copy()
+                v2[ai] = blk[0]
+                v2.sort()
+                out.append((c, (nphase, *v2), bad, good))
+        return out
+
     def successors(self, state: State) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
         """(choice index, canonical successor, violated, reached) for the enabled choices.
 
@@ -1271,6 +1476,8 @@ class CompiledModel:
                 a2, t2, pb, pg = self.prescan_block(0, state[1], state[2:1 + n])
                 out1.append((self.prescan_index, (nphase, a2, *t2), pb, pg))
             return out1
+        if self._flat:
+            return self._flat_successors(state, mode, nphase)
         busy = False
         vec = [nphase]
         base_bad: list[Property] = []

@@ -163,7 +163,27 @@ def _tag_field_domains(spec: ir.Spec, ins: ir.Instruction) -> list[tuple[str, tu
     return out
 
 
+#: retirement_check's answers by (instruction, tag type), each kept with the two objects
+#: so that an id reused by another object is a miss
+_RETIREMENT: dict[tuple[int, int], tuple[ir.Instruction, object, str | None]] = {}
+
+
 def retirement_check(spec: ir.Spec, ins: ir.Instruction) -> str | None:
+    """None when an idle tag of ``ins`` may be stored with its initial values; else why not
+    (:func:`_retirement_check`, whose answer depends on the instruction and the tag type
+    only, once per process for each)."""
+    key = (id(ins), id(spec.tag_type))
+    hit = _RETIREMENT.get(key)
+    if hit is not None and hit[0] is ins and hit[1] is spec.tag_type:
+        return hit[2]
+    why = _retirement_check(spec, ins)
+    if len(_RETIREMENT) > 256:
+        _RETIREMENT.clear()
+    _RETIREMENT[key] = (ins, spec.tag_type, why)
+    return why
+
+
+def _retirement_check(spec: ir.Spec, ins: ir.Instruction) -> str | None:
     """None when an idle tag of ``ins`` may be stored with its initial values; else why not.
 
     Idle: not pending, and the rung-true row would execute.  By enumeration over the
@@ -197,19 +217,22 @@ def retirement_check(spec: ir.Spec, ins: ir.Instruction) -> str | None:
 
     if not idle(initial):
         return "a fresh tag's rise would not execute"
+    # the rows from the initial values, the same for every valuation
+    from_initial = {cond: run_row(cond, initial) for cond in ("rung_false", "prescan", "rung_true")}
+    names = tuple(n for n, _d in fields)
     for combo in itertools.product(*(d for _n, d in fields)):
-        vals = dict(zip((n for n, _d in fields), combo))
+        vals = dict(zip(names, combo))
         if not idle(vals):
             continue
         for cond in ("rung_false", "prescan"):
             a, ea = run_row(cond, vals)
-            b, eb = run_row(cond, initial)
+            b, eb = from_initial[cond]
             if ea or eb:
                 return f"the {cond} row executes the instruction"
             if idle(a) != idle(b) or (not idle(a) and a != b):
                 return f"the {cond} row depends on the values an idle tag keeps ({sorted(vals.items())})"
         a, _ = run_row("rung_true", vals)
-        b, _ = run_row("rung_true", initial)
+        b = from_initial["rung_true"][0]
         if a != b:
             return f"a rise depends on the values an idle tag keeps ({sorted(vals.items())})"
     return None

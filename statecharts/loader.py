@@ -338,8 +338,10 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     raw = read_input(path, errors, what=what, limit=MAX_FILE_BYTES)
     if raw is None:
         return None
-    cacheable = _in_bundled_spec(path)
-    if cacheable and _remembered_tree(name, raw) is None:
+    # the project's own files' trees are kept; any file with the same bytes (a copy of
+    # one) is read from that entry
+    cacheable = _project_file(path)
+    if _remembered_tree(name, raw) is None:
         from statecharts import tree_cache
 
         cached = tree_cache.load(raw)
@@ -355,10 +357,23 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
     return tree
 
 
-def _in_bundled_spec(path: Path) -> bool:
-    """Whether ``path`` is a file of the bundled spec (whose parsed trees are cached on disk)."""
+@functools.lru_cache(maxsize=1)
+def _project_dirs() -> tuple[Path, ...]:
+    """The folders of the project's own YAML files: the bundled spec, the bundled
+    conformance systems and, in a checkout, the scenarios."""
+    spec = bundled_spec_dir().resolve()
+    out = [spec, (Path(__file__).resolve().parent.parent / "conformance" / "systems")]
+    scenarios = spec.parent / "scenarios"
+    if scenarios.is_dir():
+        out.append(scenarios)
+    return tuple(out)
+
+
+def _project_file(path: Path) -> bool:
+    """Whether ``path`` is one of the project's own files (whose parsed trees are cached on disk)."""
     try:
-        return bundled_spec_dir().resolve() in Path(path).resolve().parents
+        parents = Path(path).resolve().parents
+        return any(d in parents for d in _project_dirs())
     except (OSError, ModuleNotFoundError):  # pragma: no cover - package data missing
         return False
 
@@ -416,9 +431,11 @@ _trees_bytes = 0
 
 
 def forget_trees() -> None:
-    """Empty the in-process memo of parsed trees (the next load parses or reads the disk cache)."""
+    """Empty the in-process memos of parsed trees and of documents found valid (the next
+    load parses and checks, or reads the disk cache)."""
     global _trees_bytes
     _TREES.clear()
+    _VALID_DOCUMENTS.clear()
     _trees_bytes = 0
 
 
@@ -686,6 +703,12 @@ def schema_diagnostics(
         key = None
     if key is not None and key in _VALID_DOCUMENTS:
         return []
+    from statecharts import tree_cache
+
+    schema_text = _schema_text(schema)
+    if key is not None and tree_cache.known_valid(schema_text, key[1]):
+        _VALID_DOCUMENTS.add(key)
+        return []
     out = []
     for err in validator.iter_errors(plain):
         parts = tuple(err.absolute_path)
@@ -714,7 +737,23 @@ def schema_diagnostics(
         if len(_VALID_DOCUMENTS) > 512:
             _VALID_DOCUMENTS.clear()
         _VALID_DOCUMENTS.add(key)
+        tree_cache.remember_valid(schema_text, key[1])
     return out
+
+
+_SCHEMA_TEXTS: dict[int, tuple[dict[str, Any], str]] = {}
+
+
+def _schema_text(schema: dict[str, Any]) -> str:
+    """A schema as canonical JSON (kept per schema object)."""
+    hit = _SCHEMA_TEXTS.get(id(schema))
+    if hit is not None and hit[0] is schema:
+        return hit[1]
+    text = json.dumps(schema, sort_keys=True, default=repr)
+    if len(_SCHEMA_TEXTS) > 16:
+        _SCHEMA_TEXTS.clear()
+    _SCHEMA_TEXTS[id(schema)] = (schema, text)
+    return text
 
 
 #: The Logix DINT range: ERR, EXERR, state values and integer tag values are DINTs.

@@ -2,8 +2,11 @@
 
 Parsing YAML with positions (ruamel's round-trip loader, pure Python) is most of what a
 short command such as ``motionchart diagram`` spends its time on.  The trees of the
-bundled spec's files are therefore kept on disk, as JSON, keyed by the SHA-256 of the
-file's bytes (and of the ruamel version and this format): a changed file simply misses.
+project's own files (the bundled spec, the bundled conformance systems, the scenarios
+of a checkout) are therefore kept on disk, as JSON, keyed by the SHA-256 of the file's
+bytes (and of the ruamel version and this format): a changed file simply misses, and any
+file with the same bytes as a kept one (a copy of the spec, as a user makes to change
+one file) is read from that entry.  Only the project's own files are stored.
 
 What is kept is what the loader reads: mappings and sequences with their line/column
 positions (``lc``), string keys, and scalars as plain ``str``/``int``/``float``/``bool``/
@@ -18,6 +21,7 @@ Location: ``$MOTIONCHART_CACHE_DIR``, else ``$XDG_CACHE_HOME/motionchart``, else
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import json
 import os
@@ -29,7 +33,7 @@ import ruamel.yaml
 from ruamel.yaml.comments import CommentedMap, CommentedSeq
 
 FORMAT = "motionchart-tree/1"
-MAX_ENTRIES = 400
+MAX_ENTRIES = 1000
 SUBDIR = "trees"
 
 
@@ -127,4 +131,65 @@ def store(raw: bytes, tree: Any) -> None:
         return
 
 
-__all__ = ["FORMAT", "MAX_ENTRIES", "cache_dir", "load", "store"]
+# --------------------------------------------------------------------------- valid documents
+#
+# Checking a file against its JSON schema (pure-Python jsonschema) is the other large cost
+# of loading the spec.  A document found valid is remembered as an empty file named by the
+# SHA-256 of (this format, the jsonschema version, the schema, the document), all as
+# canonical JSON: a marker holds no data, so reading one can only skip a check that was
+# passed by exactly these bytes before.
+
+VALID_SUBDIR = "valid"
+MAX_VALID = 2000
+
+
+@functools.cache
+def _jsonschema_version() -> str:
+    from importlib import metadata
+
+    try:
+        return metadata.version("jsonschema")
+    except metadata.PackageNotFoundError:  # pragma: no cover - jsonschema is a dependency
+        return ""
+
+
+def _valid_marker(schema_text: str, document_text: str) -> Path | None:
+    folder = cache_dir()
+    if folder is None:
+        return None
+    h = hashlib.sha256()
+    h.update(f"{FORMAT}\0{_jsonschema_version()}\0{len(schema_text)}\0".encode())
+    h.update(schema_text.encode())
+    h.update(b"\0")
+    h.update(document_text.encode())
+    return folder.parent / VALID_SUBDIR / h.hexdigest()
+
+
+def known_valid(schema_text: str, document_text: str) -> bool:
+    """Whether this document (canonical JSON) was found valid against this schema before."""
+    marker = _valid_marker(schema_text, document_text)
+    try:
+        return marker is not None and marker.is_file()
+    except OSError:
+        return False
+
+
+def remember_valid(schema_text: str, document_text: str) -> None:
+    """Remember a document found valid (best effort: any failure is ignored)."""
+    marker = _valid_marker(schema_text, document_text)
+    if marker is None:
+        return
+    try:
+        marker.parent.mkdir(parents=True, exist_ok=True)
+        marker.touch()
+        entries = list(marker.parent.iterdir())
+        if len(entries) > MAX_VALID:
+            entries.sort(key=lambda p: p.stat().st_mtime)
+            for old in entries[: len(entries) - MAX_VALID]:
+                with contextlib.suppress(OSError):
+                    old.unlink()
+    except OSError:
+        return
+
+
+__all__ = ["FORMAT", "MAX_ENTRIES", "MAX_VALID", "cache_dir", "known_valid", "load", "remember_valid", "store"]

@@ -333,7 +333,10 @@ class Model:
 
         # retirement of idle tags, verified per instruction
         retire_ok: dict[str, bool] = {}
+        called = {m for _t, m, _a in self.program}
         for ins in spec.instructions:
+            if ins.id not in called:  # no tag of it: nothing to retire
+                continue
             why = retirement_check(spec, ins) if sysdef.retire_idle_tags else "disabled in the system"
             retire_ok[ins.id] = why is None
             if why is not None and sysdef.retire_idle_tags and any(m == ins.id for _t, m, _a in self.program):

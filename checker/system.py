@@ -4,9 +4,9 @@ Pipeline position: ``spec/systems/*.yaml`` -> **checker.system** -> :mod:`checke
 -> :mod:`checker.search`.
 
 A system (``format: motionchart-system/1``, schema ``spec/schema/system.schema.json``)
-chooses axis groups (an axis type, how many identical axes, the initial state and
-variables, and a list of *configurations*: alternative initial variable values, each
-of which is explored), the program (one MOTION_INSTRUCTION tag per instruction per
+chooses axis groups (an axis type, the chart when several charts model that type, how
+many identical axes, the initial state and variables, and a list of *configurations*:
+alternative initial variable values, each of which is explored), the program (one MOTION_INSTRUCTION tag per instruction per
 axis; by default every instruction defined for the axis chart), operand domains
 (the instruction's ``domain`` unless overridden here), the environment events offered
 (by default the chart's events of kind ``environment``), whether prescan passes are
@@ -151,6 +151,14 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
             types = sorted({t for c in spec.charts for t in c.axis_types})
             err((*p, "type"), f"unknown axis type {g['type']!r}; expected one of: {', '.join(types)}")
             continue
+        if "chart" in g and g["chart"] != chart.id:
+            # an axis type several charts name (AXIS_VIRTUAL): the group chooses one of them
+            named = [c.id for c in spec.charts if g["type"] in c.axis_types]
+            if g["chart"] not in named:
+                err((*p, "chart"), f"chart {g['chart']!r} does not model axis type {g['type']!r}; "
+                                   f"expected one of: {', '.join(named)}")
+                continue
+            chart = spec.chart(g["chart"])
         charts_used[chart.id] = chart
         if g["name"] in seen_names:
             err((*p, "name"), f"axis group name {g['name']!r} is used twice")

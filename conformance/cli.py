@@ -35,8 +35,8 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     v.add_argument("-o", "--output", required=True, metavar="DIR", help="directory to write (replaced as a whole)")
     v.add_argument("--scenarios", action="append", metavar="DIR", help="scenario directories (default: scenarios)")
     v.add_argument("--system", action="append", metavar="NAME",
-                   help="bundled system names or system files to generate from (default: noncip, cip and the "
-                        "two small CIP systems of conformance/systems/)")
+                   help="bundled system names or system files to generate from (default: those "
+                        "conformance/systems/suite.yaml lists)")
     v.add_argument("--no-generated", action="store_true", help="export the scenarios only")
     v.add_argument("--spec", action="append", metavar="PATH", help="spec files or directories (default: bundled)")
     v.add_argument("--quiet", "-q", action="store_true", help="no progress lines")

@@ -85,8 +85,9 @@ class WitnessModel(Model):
 
     def build_system(self, assignment: Sequence[int], backend: Any = None) -> System:
         plain = super().build_system(assignment, backend)
+        # the model's scan rules unchanged: the drive model's outcomes stay inputs (motion off)
         return RecordingSystem(self.spec, list(plain.axes.values()), self.program, scan_ms=self.sysdef.scan_ms,
-                               coarse_update_ms=self.sysdef.coarse_update_ms)
+                               coarse_update_ms=self.sysdef.coarse_update_ms, motion=plain.motion)
 
 
 def split_fired(chart: str, fired: Sequence[str]) -> tuple[list[str], list[str], list[str]]:

@@ -170,6 +170,30 @@ def test_bad_system_file_is_located(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert code == 1 and "unknown instruction 'MXYZ'" in err and f"{bad}:" in err
 
 
+def test_a_system_chooses_the_chart_of_a_type_several_charts_model(tmp_path: Path,
+                                                                  capsys: pytest.CaptureFixture[str]) -> None:
+    from checker.system import load_system
+    virtual = SMALL_SYSTEM.replace("type: AXIS_SERVO\n    program: [MSO, MASD, MASR]",
+                                   "type: AXIS_VIRTUAL\n    chart: AxisVirtual\n    program: [MAM_VIRTUAL]")
+    virtual = virtual.replace("[servo_fault, fault_cleared]", "[axis_fault]").replace(
+        "[ServoOutput, DriveOutputCommand]", "[ActualPosition]")
+    good = tmp_path / "virtual.yaml"
+    good.write_text(virtual, encoding="utf-8")
+    sysdef = load_system(good, load_spec())
+    assert [(g.axis_type, g.chart) for g in sysdef.groups] == [("AXIS_VIRTUAL", "AxisVirtual")]
+    # without `chart:` the type keeps its first chart, on which MAM_VIRTUAL is not defined
+    plain = tmp_path / "plain.yaml"
+    plain.write_text(virtual.replace("    chart: AxisVirtual\n", ""), encoding="utf-8")
+    code, _, err = _run(["--system", str(plain)], capsys)
+    assert code == 1 and "MAM_VIRTUAL is not defined for chart AxisNonCIP" in err
+    # a chart that does not model the type is an error at the `chart:` line
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(virtual.replace("chart: AxisVirtual", "chart: AxisCIP"), encoding="utf-8")
+    code, _, err = _run(["--system", str(bad)], capsys)
+    assert code == 1 and f"{bad}:8:" in err and "chart 'AxisCIP' does not model axis type 'AXIS_VIRTUAL'" in err
+    assert "expected one of: AxisNonCIP, AxisVirtual" in err
+
+
 def test_list_systems(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = _run(["--list-systems"], capsys)
     assert code == 0 and "noncip" in out and "noncip_pairs" in out

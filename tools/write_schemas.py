@@ -426,6 +426,7 @@ system = {
             "type": "object", "additionalProperties": False, "required": ["name", "type"],
             "properties": {
                 "name": NAME_KEY, "type": {"type": "string"},
+                "chart": {**ID, "description": "The chart of the axes when several charts model their type (AXIS_VIRTUAL); default: the first."},
                 "count": {"type": "integer", "minimum": 1, "maximum": 64},
                 "state": {"type": "string"},
                 "variables": {"type": "object", "additionalProperties": SCALAR},

@@ -25,6 +25,7 @@ ratios over the scaled sizes.
 
 from __future__ import annotations
 
+import gc
 import statistics
 import sys
 import time
@@ -94,7 +95,12 @@ def main() -> int:
     print("bundled systems (bundled properties, one run each)")
     print(f"{'system':<14} {'states':>9} {'transitions':>12} {'depth':>6} {'wall s':>7} {'cpu s':>7} "
           f"{'states/s':>9} {'st/cpu-s':>9} {'B/state':>8}  verdict")
+    r = None
     for name, path in bundled_systems().items():
+        # the previous system's result (its tables, millions of objects) is freed and
+        # collected here, not inside the next system's timing
+        r = None
+        gc.collect()
         model = Model(spec, load_system(path, spec), props)
         c0 = time.process_time()
         r = explore(model, progress=False, max_seconds=240)

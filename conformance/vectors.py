@@ -386,7 +386,16 @@ def generated_vectors(spec: ir.Spec, system: str | Path, suite: Suite,
         v = _run_vector(spec, model, sysdef, suite, trace.assignment, choices, vid, what)
         missing = [t for k, t in found if t not in v["covers"][k]]
         if missing:
-            raise RuntimeError(f"vector {vid}: the replayed run does not cover {missing}; the abstraction is not exact")
+            # the search's abstraction lets it reach an item that the engine, replaying the
+            # same inputs, does not: the system's abstraction is not exact for this item
+            from checker.system import SystemError_
+
+            raise SystemError_([Diagnostic(
+                sysdef.file, 1, 1, "abstraction",
+                f"vector {vid}: replayed on the engine, the run the search found does not cover "
+                f"{', '.join(missing)}; the system's abstraction (collapsed variables, drive outcomes as "
+                "inputs) is not exact for it: collapse fewer variables, or leave out the configuration "
+                "or input that reaches it")])
         suite.vectors.append(v)
     if progress:
         progress(f"system {sysdef.name}: {result.states:,} states, {len(by_witness)} shortest runs")

@@ -251,6 +251,44 @@ def test_vectors(tmp_path: Path, one_vector: Path, capsys: pytest.CaptureFixture
     assert _run(["vectors", "-o", str(tmp_path / "v4"), "--scenarios", "no/such/dir"], capsys)[0] == 2
 
 
+_INEXACT_SYSTEM = """\
+format: motionchart-system/1
+name: home_stop
+description: a virtual axis homing, stopped with the Home stop type
+source: "MC tests/test_cli_exit_codes.py"
+scan_ms: 10
+coarse_update_ms: 10
+axes:
+  - name: Axis
+    type: AXIS_VIRTUAL
+    chart: AxisVirtual
+    state: ServoControl
+    program: [MAH_VIRTUAL, MAS_VIRTUAL]
+    configurations:
+      - {name: linear}
+operands:
+  MAS_VIRTUAL: {StopType: [4]}
+environment: [home_complete, stopping_complete]
+max_live_calls: 2
+abstraction:
+  collapse: [ActualPosition, CommandVelocity, MoveCommand, MoveSpeed, MoveRemaining, MovePlanned, MoveType,
+             JogVelocity, GearRatio, StopDecel, RedefinePosition, RedefineType, HomePosition, PositionUnwind]
+"""
+
+
+def test_vectors_of_a_system_whose_abstraction_is_not_exact(tmp_path: Path,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """The search reaches the homing stop (mas_home) with the planner collapsed; the engine,
+    replaying the run, does not: a located error on the system file, not a traceback."""
+    system = tmp_path / "home_stop.yaml"
+    system.write_text(_INEXACT_SYSTEM, encoding="utf-8")
+    (tmp_path / "none").mkdir()
+    code, _, err = _run(["vectors", "-q", "-o", str(tmp_path / "v"), "--scenarios", str(tmp_path / "none"),
+                         "--system", str(system)], capsys)
+    assert code == 1 and "Traceback" not in err
+    assert f"{system}:1:1: abstraction:" in err and "mas_home" in err and "not exact" in err
+
+
 def test_conform(tmp_path: Path, one_vector: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert _run(["conform", "--adapter", ADAPTER, "--vectors", str(one_vector), "-q"], capsys)[0] == 0
     # a finding: the vector expects another state than the implementation reaches

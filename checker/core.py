@@ -877,17 +877,8 @@ class CompiledModel:
                 watch = tuple(x for x in watch if x != k)
         else:
             order = active
-        if kind == RAISE:
-            ti = tis[k]
-            tid = tags[k]
-            assert type(arg) is int  # a RAISE choice's argument is its operand index
-            r = self._raise[ti].get((tid, arg))
-            tags[k] = r if r is not None else self.piece_raise(ti, tid, arg)
-        elif kind == DROP:
-            ti = tis[k]
-            tid = tags[k]
-            r = self._drop[ti].get(tid)
-            tags[k] = r if r is not None else self.piece_drop(ti, tid)
+        if kind in (RAISE, DROP):
+            tags[k] = self._rung_input(tis[k], tags[k], kind, arg)
         elif kind == EVENT:
             assert type(arg) is str  # an EVENT choice's argument is its event name
             h = (*h, arg)
@@ -899,6 +890,16 @@ class CompiledModel:
             return core, q, h, (), order, watch
         core, events = self._step3(ai, core, q, h, tags, order)
         return core, (), (), events, order, watch
+
+    def _rung_input(self, ti: int, tid: int, kind: int, arg: object) -> int:
+        """Tag ``ti``'s part ``tid`` after a RAISE (``arg``: the operand index) or a DROP
+        choice of step 1."""
+        if kind == RAISE:
+            assert type(arg) is int  # a RAISE choice's argument is its operand index
+            r = self._raise[ti].get((tid, arg))
+            return r if r is not None else self.piece_raise(ti, tid, arg)
+        r = self._drop[ti].get(tid)
+        return r if r is not None else self.piece_drop(ti, tid)
 
     def _step2(self, ai: int, tags: list[int], order: tuple[int, ...], core: int, q: tuple[int, ...],
                prescan: bool) -> tuple[tuple[int, ...], tuple[int, ...]]:
@@ -954,15 +955,10 @@ class CompiledModel:
             order = active if k in active else tuple(sorted((*active, k)))
             if k in watch:
                 watch = tuple(x for x in watch if x != k)
+            tl[k] = self._rung_input(self.tis[ai][k], tags[k], kind, arg)
+            # tag k's row (as in _step2, inlined: this is the search's innermost loop)
             ti = self.tis[ai][k]
-            tid = tags[k]
-            if kind == RAISE:
-                assert type(arg) is int  # a RAISE choice's argument is its operand index
-                r = self._raise[ti].get((tid, arg))
-                tid = r if r is not None else self.piece_raise(ti, tid, arg)
-            else:
-                r = self._drop[ti].get(tid)
-                tid = r if r is not None else self.piece_drop(ti, tid)
+            tid = tl[k]
             cond = 1 if self._rung[tid] else 0
             rr = self._rows[ti].get(tid * 3 + cond)
             if rr is None:

@@ -1540,19 +1540,11 @@ def _spec_key(paths: Sequence[Path | str] | None, files: Sequence[Path]) -> tupl
     within the size limit (anything else is the load's to report: a FIFO or a device is
     never read here)."""
     import hashlib
-    import stat
 
     digests = []
     for f in files:
-        try:
-            st = os.stat(f)
-            if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_FILE_BYTES:
-                return None
-            with open(f, "rb") as fh:
-                raw = fh.read(MAX_FILE_BYTES + 1)
-        except OSError:
-            return None
-        if len(raw) > MAX_FILE_BYTES:
+        raw = read_input(f, [], limit=MAX_FILE_BYTES)  # the loader's own guarded read
+        if raw is None:
             return None
         digests.append(hashlib.sha256(raw).digest())
     given = None if paths is None else tuple(str(p) for p in paths)

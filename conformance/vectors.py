@@ -427,7 +427,7 @@ def _run_vector(spec: ir.Spec, model: Any, sysdef: Any, suite: Suite, assignment
     calls = [(t, m, a) for t, m, a in program if t in used]
     setup: dict[str, Any] = {
         "scan_ms": sysdef.scan_ms, "coarse_update_ms": sysdef.coarse_update_ms,
-        "axes": [], "program": [_program_entry(t, m, a, {}) for t, m, a in calls],
+        "axes": [], "program": [_program_entry(t, m, a, {}, model.masters.get(t)) for t, m, a in calls],
     }
     for (name, g), ci in zip(model.axis_defs, assignment):
         variables = dict(g.variables)

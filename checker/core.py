@@ -1619,7 +1619,7 @@ class CompiledModel:
             return None
         index = {name: i for i, (name, _g) in enumerate(model.axis_defs)}
         out: dict[int, int] = {}
-        for ti, s in enumerate(model.slots):
+        for s in model.slots:
             master = s.tag.master
             if master is None:
                 continue

@@ -123,8 +123,8 @@ def relevant_variables(spec: ir.Spec, chart: ir.Chart, instructions: Iterable[ir
             exprs += [e for e in (ins.process.complete_when, ins.process.ends_when) if e is not None]
         if ins.request is not None:
             exprs += [a.value for a in ins.request.actions]
-        for e in exprs:
-            need |= {n[7:] for n in e.names if n.startswith("master.") and n[7:] in names}
+        for read in exprs:
+            need |= {n[7:] for n in read.names if n.startswith("master.") and n[7:] in names}
 
     for t in chart.transitions:
         if t.guard is not None:

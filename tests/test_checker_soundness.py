@@ -33,6 +33,13 @@ def _systems(spec: ir.Spec) -> dict[str, SystemDef]:
     base = out["noncip"]
     g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MDO", "MASD", "MAFR"))
     out["two_axes"] = dataclasses.replace(base, name="two_axes", groups=(g,), max_live_calls=1)
+    # a slave axis whose MAG reads its bound master axis (a conformance system), and the
+    # same with the master listed first (the core then expands states on the interpreter)
+    from pathlib import Path
+    geared = load_system(Path(__file__).resolve().parents[1] / "conformance" / "systems" / "mag_virtual.yaml", spec)
+    out["geared"] = geared
+    out["geared_master_first"] = dataclasses.replace(geared, name="geared_master_first",
+                                                     groups=tuple(reversed(geared.groups)))
     return out
 
 
@@ -69,7 +76,7 @@ def _offered(model: Model, snapshot: tuple[object, ...]) -> list[int]:
     return [c.index for c in model.enabled()]
 
 
-@pytest.mark.parametrize("name", ["cip", "noncip", "noncip_pairs", "two_axes"])
+@pytest.mark.parametrize("name", ["cip", "noncip", "noncip_pairs", "two_axes", "geared", "geared_master_first"])
 @given(data=st.data())
 def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
     model = models[name]

@@ -47,6 +47,26 @@ settings.register_profile("deep", max_examples=2000, **_NOT_TIMED)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
 
 
+#: The test files that use the session's scenario runs (the ``scenario_runs`` fixture,
+#: about ten seconds): ``make test``'s file-by-file distribution (``--dist loadfile``)
+#: gives them to one worker together, so the scenarios run once, not once per worker.
+SCENARIO_RUN_FILES = frozenset({"test_aoi.py", "test_cip_chart.py", "test_mrhd_cip.py", "test_scenarios.py"})
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadfile``, with the files of :data:`SCENARIO_RUN_FILES` as one unit."""
+    if config.getoption("dist", None) != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class _FileScheduling(LoadScopeScheduling):  # type: ignore[misc]  # xdist ships no stubs
+        def _split_scope(self, nodeid: str) -> str:
+            file = nodeid.split("::", 1)[0]
+            return "scenario runs" if Path(file).name in SCENARIO_RUN_FILES else file
+
+    return _FileScheduling(config, log)
+
+
 def pytest_report_header(config: pytest.Config) -> str:
     return f"hypothesis profile: {settings.get_current_profile_name()}"
 

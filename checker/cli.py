@@ -141,11 +141,8 @@ def _missing(paths: Sequence[str]) -> list[str]:
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
-    """Load the whole spec, its add-on instructions included; every problem is reported.
-
-    With directories, the motion instructions the add-on instructions call
-    (``instructions/motion/``) are those of every given directory that has them."""
-    from statecharts.aoi import load_motion_calls
+    """Load the whole spec, its add-on instructions and the motion instructions they call
+    (``instructions/motion/``) included, as every command loads it; every problem is reported."""
     from statecharts.loader import load_spec
 
     missing = _missing(args.paths)
@@ -164,15 +161,7 @@ def _validate(args: argparse.Namespace, out: TextIO) -> int:
         spec = load_spec(args.paths or None)
     except InputError as exc:
         problems.extend(exc.diagnostics)
-    dirs = [Path(p) for p in args.paths if (Path(p) / "instructions" / "motion").is_dir()] if args.paths else [None]
-    progress.update("loading the motion instructions the add-on instructions call")
-    for motion_dir in dirs:
-        try:
-            load_motion_calls(motion_dir)
-        except InputError as exc:
-            problems.extend(exc.diagnostics)
     progress.close()
-    problems = list(dict.fromkeys(problems))
     if problems or spec is None:
         if args.json:
             json.dump({"valid": False, "errors": [str(d) for d in problems],

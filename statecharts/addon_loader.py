@@ -1,4 +1,5 @@
-"""Build an ``add_on_instruction`` section of a spec file into :class:`statecharts.ir.AddOnInstruction`.
+"""Build an ``add_on_instruction`` section of a spec file into :class:`statecharts.ir.AddOnInstruction`,
+and the motion instructions its recovery calls (``format: motionchart-subinstruction/1``).
 
 Pipeline position: called by :func:`statecharts.loader.load_spec` (same builder, same
 diagnostics, same SpecError) for every spec file with an ``add_on_instruction:``
@@ -6,14 +7,25 @@ section; the schema has already accepted its shape.  Here: duplicate ids, unknow
 codes, states, charts, events and variables, and every expression parsed against the
 names it may read (the parameters, ``<REAL parameter>.finite``, the local tags, the
 facts of the world's objects by alias, the motion numbers and the rotary arithmetic).
+
+The sub-instruction files (``spec/instructions/motion/``) are checked here too, by the
+same load: their schema, their check expressions, one file per mnemonic, and every call
+of an add-on instruction naming one of them.  Every command loads the spec through
+:func:`statecharts.loader.load_spec`, so a spec ``motionchart validate`` rejects is
+rejected by every command, with the same located diagnostics.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import functools
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, cast
 
 from statecharts import ir
-from statecharts.expr import Expr, parse_expression
+from statecharts.diagnostics import Diagnostic, locate, node_path
+from statecharts.expr import Expr, ExprError, check_names, parse_expression
 
 # ``b`` is the spec loader's builder (error, loc, prov, expr, variable, duplicates), ``f`` the
 # file being built and nodes the loader's key-checked mappings: typed Any here because they
@@ -244,3 +256,117 @@ def _world(b: Any, f: Any, node: Any, charts: dict[str, ir.Chart], base: tuple[A
                                       tuple(o.get("stop") or ()), tuple(o.get("register") or ()), setup,
                                       b.prov(f, p, o), b.loc(f, p)))
     return ir.World(tuple(objects), b.prov(f, base, node), b.loc(f, base))
+
+
+# --------------------------------------------------------------------------- sub-instructions
+
+SUB_FORMAT = "motionchart-subinstruction/1"
+#: Names a sub-instruction's checks may read: the facts of its axis and master, its operands.
+SUB_NAMES = frozenset({f"{a}.{k}" for a in ("axis", "master") for k in AXIS_NAMES}
+                      | {"MoveType", "Speed", "Position", "Position.finite", "Speed.finite"})
+
+
+@dataclass(frozen=True, slots=True)
+class SubCheck:
+    fails: Expr
+    err: int
+    provenance: ir.Provenance
+    location: ir.Location
+
+
+@dataclass(frozen=True, slots=True)
+class SubInstruction:
+    mnemonic: str
+    name: str
+    axis_types: tuple[str, ...]
+    checks: tuple[SubCheck, ...]
+    kind: str
+    scans: int
+    provenance: ir.Provenance
+    location: ir.Location
+    completes: ir.Provenance
+    completes_location: ir.Location
+
+
+def is_sub_instruction(tree: Any) -> bool:
+    """Whether a parsed file is a sub-instruction file (by its ``format:``)."""
+    return isinstance(tree, dict) and tree.get("format") == SUB_FORMAT
+
+
+@functools.cache
+def sub_instruction_schema() -> dict[str, Any]:
+    from statecharts.loader import bundled_spec_dir
+    text = (bundled_spec_dir() / "schema" / "subinstruction.schema.json").read_text(encoding="utf-8")
+    return cast("dict[str, Any]", json.loads(text))
+
+
+def _sub_expr(f: str, tree: Any, parts: tuple[Any, ...], text: str, errors: list[Diagnostic]) -> Expr | None:
+    line, col = locate(tree, parts)
+    try:
+        e = parse_expression(text)
+    except ExprError as exc:
+        errors.append(Diagnostic(f, line, col, node_path(parts), f"bad expression: {exc}"))
+        return None
+    unknown = check_names(e, SUB_NAMES)
+    if unknown:
+        names = ", ".join(n for n, _ in unknown)
+        errors.append(Diagnostic(f, line, col, node_path(parts), f"unknown name(s) {names} in {text!r}"))
+        return None
+    return e
+
+
+def build_sub_instructions(documents: Sequence[tuple[str, Any]], errors: list[Diagnostic]) -> tuple[SubInstruction, ...]:
+    """The sub-instructions of parsed sub-instruction files (name, YAML tree); every
+    problem is appended to ``errors`` (a file with a problem gives no sub-instruction)."""
+    from statecharts.loader import plain_data, schema_diagnostics
+
+    subs: list[SubInstruction] = []
+    for f, tree in documents:
+        before = len(errors)
+        errors.extend(schema_diagnostics(f, tree, sub_instruction_schema(), "a sub-instruction file"))
+        if len(errors) > before:
+            continue
+        d = plain_data(tree)["instruction"]
+
+        def where(*parts: Any, f: str = f, tree: Any = tree) -> ir.Location:
+            return ir.Location(f, *locate(tree, parts), node_path(parts))
+
+        def prov(n: Any) -> ir.Provenance:
+            return ir.Provenance(str(n["source"]), n.get("interpretation"))
+
+        checks = []
+        for i, c in enumerate(d["checks"]):
+            e = _sub_expr(f, tree, ("instruction", "checks", i, "fails"), c["fails"], errors)
+            if e is not None:
+                checks.append(SubCheck(e, int(c["err"]), prov(c), where("instruction", "checks", i)))
+        if d["mnemonic"] in {x.mnemonic for x in subs}:
+            errors.append(Diagnostic(f, *locate(tree, ("instruction", "mnemonic")), "instruction.mnemonic",
+                                     f"sub-instruction {d['mnemonic']!r} is defined twice"))
+        if len(errors) > before:
+            continue
+        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(d["axis_types"]), tuple(checks),
+                                   d["completes"]["kind"], int(d["completes"].get("scans", 1)), prov(d),
+                                   where("instruction"), prov(d["completes"]), where("instruction", "completes")))
+    return tuple(subs)
+
+
+def calls_of(add_on: ir.AddOnInstruction) -> list[tuple[str, ir.Location]]:
+    """The sub-instructions an add-on instruction calls, each with the place of the call."""
+    out = [(s.call.instruction, s.location) for s in add_on.recovery.states if s.call is not None]
+    for rule in (add_on.rung_false, add_on.prescan):
+        if rule.abort_call:
+            out.append((rule.abort_call, rule.location))
+    return out
+
+
+def undefined_calls(add_ons: Sequence[ir.AddOnInstruction], subs: Sequence[SubInstruction]) -> list[Diagnostic]:
+    """A call of an add-on instruction naming no sub-instruction of ``subs`` (a call of
+    none of :data:`MOTION_CALLS` is reported by :func:`build_add_on` already)."""
+    known = {s.mnemonic for s in subs}
+    out = []
+    for a in add_ons:
+        for mnemonic, loc in calls_of(a):
+            if mnemonic not in known and mnemonic in MOTION_CALLS:
+                out.append(Diagnostic(loc.file, loc.line, loc.column, loc.path,
+                                      f"unknown sub-instruction {mnemonic!r}; known: {', '.join(sorted(known))}"))
+    return out

@@ -29,13 +29,13 @@ from typing import Any, ClassVar, cast
 import jsonschema
 
 from statecharts import ir
+from statecharts.addon_loader import SubInstruction, build_sub_instructions, undefined_calls
 from statecharts.diagnostics import Diagnostic, ScenarioError, SpecError, locate, node_path
-from statecharts.expr import EvalError, Expr, ExprError, check_names, parse_expression
+from statecharts.expr import EvalError
 from statecharts.loader import bundled_spec_dir, load_spec, plain_data, read_yaml, schema_diagnostics
 from statecharts.rotary import effective_move_type, signed_distance, unwind
 from statecharts.values import as_float, as_int
 
-SUB_FORMAT = "motionchart-subinstruction/1"
 SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 _SCHEMA_DIR = bundled_spec_dir() / "schema"
 
@@ -52,32 +52,6 @@ _AXIS_PROPS: dict[str, Any] = {k: v for k, v in _SETUP["axes"]["additionalProper
                                if k not in _CHART_SETUP_FIELDS}
 _HANDLER_PROPS: dict[str, Any] = {k: v for k, v in _SETUP["handlers"]["additionalProperties"]["properties"].items()
                                   if k not in _CHART_SETUP_FIELDS}
-#: Names a sub-instruction's checks may read besides its operands.
-SUB_NAMES = frozenset({f"{a}.{k}" for a in ("axis", "master") for k in (*_AXIS_PROPS, "rotary", "geared", "name")})
-
-
-@dataclass(frozen=True, slots=True)
-class SubCheck:
-    fails: Expr
-    err: int
-    provenance: ir.Provenance
-    location: ir.Location
-
-
-@dataclass(frozen=True, slots=True)
-class SubInstruction:
-    mnemonic: str
-    name: str
-    axis_types: tuple[str, ...]
-    checks: tuple[SubCheck, ...]
-    kind: str
-    scans: int
-    provenance: ir.Provenance
-    location: ir.Location
-    completes: ir.Provenance
-    completes_location: ir.Location
-
-
 @dataclass(frozen=True)
 class AoiSpec:
     """The add-on instruction of a loaded spec, with the motion instructions its recovery calls."""
@@ -114,86 +88,31 @@ class AoiSpec:
         return self.add_on.parameter(name).type
 
 
-def _exprs(f: str, tree: Any, parts: tuple[Any, ...], text: str, known: frozenset[str],
-           errors: list[Diagnostic]) -> Expr | None:
-    line, col = locate(tree, parts)
-    try:
-        e = parse_expression(text)
-    except ExprError as exc:
-        errors.append(Diagnostic(f, line, col, node_path(parts), f"bad expression: {exc}"))
-        return None
-    unknown = check_names(e, known)
-    if unknown:
-        names = ", ".join(n for n, _ in unknown)
-        errors.append(Diagnostic(f, line, col, node_path(parts), f"unknown name(s) {names} in {text!r}"))
-        return None
-    return e
-
-
 def load_motion_calls(spec_dir: Path | None = None) -> tuple[SubInstruction, ...]:
-    """The motion instructions as the recovery calls them (spec/instructions/motion/)."""
+    """The motion instructions as the recovery calls them (spec/instructions/motion/),
+    checked as :func:`statecharts.loader.load_spec` checks them; SpecError with every problem."""
     root = spec_dir or bundled_spec_dir()
     errors: list[Diagnostic] = []
-    subs: list[SubInstruction] = []
+    documents: list[tuple[str, Any]] = []
     for p in sorted((root / "instructions" / "motion").glob("*.yaml")):
-        f = str(p)
-        before = len(errors)
         tree = read_yaml(p, errors)
-        if tree is None:
-            continue
-        errors.extend(schema_diagnostics(f, tree, _schema("subinstruction.schema.json"), "a sub-instruction file"))
-        if len(errors) > before:
-            continue
-        d = plain_data(tree)["instruction"]
-        names = SUB_NAMES | {"MoveType", "Speed", "Position", "Position.finite", "Speed.finite"}
-
-        def where(*parts: Any, f: str = f, tree: Any = tree) -> ir.Location:
-            return ir.Location(f, *locate(tree, parts), node_path(parts))
-
-        def prov(n: Mapping[str, Any]) -> ir.Provenance:
-            return ir.Provenance(str(n["source"]), n.get("interpretation"))
-
-        checks = []
-        for i, c in enumerate(d["checks"]):
-            e = _exprs(f, tree, ("instruction", "checks", i, "fails"), c["fails"], names, errors)
-            if e is not None:
-                checks.append(SubCheck(e, int(c["err"]), prov(c), where("instruction", "checks", i)))
-        if d["mnemonic"] in {x.mnemonic for x in subs}:
-            errors.append(Diagnostic(f, *locate(tree, ("instruction", "mnemonic")), "instruction.mnemonic",
-                                     f"sub-instruction {d['mnemonic']!r} is defined twice"))
-        subs.append(SubInstruction(d["mnemonic"], d["name"], tuple(d["axis_types"]), tuple(checks),
-                                   d["completes"]["kind"], int(d["completes"].get("scans", 1)), prov(d),
-                                   where("instruction"), prov(d["completes"]), where("instruction", "completes")))
+        if tree is not None:
+            documents.append((str(p), tree))
+    subs = build_sub_instructions(documents, errors)
     if errors:
         raise SpecError(errors)
-    return tuple(subs)
+    return subs
 
 
 def load_aoi(spec_dir: Path | str | None = None) -> AoiSpec:
     """The add-on instruction of the spec in ``spec_dir`` (the bundled one by default); SpecError with every problem."""
     root = Path(spec_dir) if spec_dir else None
-    problems: list[Diagnostic] = []
-    try:
-        main = load_spec([root]) if root else load_spec()
-    except SpecError as exc:
-        problems.extend(exc.diagnostics)
-        main = None
-    try:
-        subs = load_motion_calls(root)
-    except SpecError as exc:
-        problems.extend(exc.diagnostics)
-        subs = ()
-    if problems:
-        raise SpecError(problems)
-    assert main is not None
+    main = load_spec([root]) if root else load_spec()  # the motion instructions of a directory included
+    subs = load_motion_calls(root if root is None or root.is_dir() else None)
     if not main.add_ons:
         raise SpecError([Diagnostic(str(root or bundled_spec_dir()), 1, 1, "", "the spec defines no add_on_instruction")])
-    known = {s.mnemonic for s in subs}
     add_on = main.add_ons[0]
-    for st in add_on.recovery.states:
-        if st.call is not None and st.call.instruction not in known:
-            problems.append(Diagnostic(st.location.file, st.location.line, st.location.column, st.location.path,
-                                       f"unknown sub-instruction {st.call.instruction!r}; known: {', '.join(sorted(known))}"))
+    problems = undefined_calls([add_on], subs)
     if problems:
         raise SpecError(problems)
     return AoiSpec(add_on, subs, main, None if spec_dir is None else str(spec_dir))

@@ -47,7 +47,7 @@ from ruamel.yaml.error import MarkedYAMLError
 from ruamel.yaml.events import CollectionEndEvent, CollectionStartEvent
 from ruamel.yaml.tag import Tag
 
-from statecharts import drive, ir, sources
+from statecharts import addon_loader, drive, ir, sources
 from statecharts.cycles import eventless_cycles
 from statecharts.diagnostics import Diagnostic, SpecError, locate, node_path
 from statecharts.expr import (
@@ -1632,6 +1632,7 @@ def _build_spec(
     failed_files = 0
     source_errors: list[Diagnostic] = list(registry_errors)
     cited_trees: list[tuple[str, Any]] = []
+    sub_documents: list[tuple[str, Any]] = []
     if registry is not None:
         for name, tree in side:
             source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
@@ -1646,8 +1647,11 @@ def _build_spec(
             cited_trees.append((name, tree))
         if _other_format(tree):
             # properties, systems... live beside the spec and have their own loaders; an
-            # interpretation they cite still counts as used
+            # interpretation they cite still counts as used.  The motion instructions an
+            # add-on instruction calls are part of the spec: checked below, with it.
             b.used_interpretations.update(_cited_interpretations(tree))
+            if addon_loader.is_sub_instruction(tree):
+                sub_documents.append((name, tree))
             continue
         b.errors.extend(schema_diagnostics(name, tree, schema, "a spec file"))
         if len(b.errors) == before:
@@ -1749,13 +1753,18 @@ def _build_spec(
     add_ons: dict[str, ir.AddOnInstruction] = {}
     for f in files:
         if "add_on_instruction" in f.top:
-            from statecharts.addon_loader import build_add_on
             node = f.top.child("add_on_instruction", "add_on_instruction")
             if node["id"] in add_ons or node["id"] in {i.mnemonic for i in instructions.values()}:
                 b.error(f, ("add_on_instruction", "id"), f"duplicate instruction {node['id']!r}")
                 continue
             if complete:
-                add_ons[node["id"]] = build_add_on(b, f, node, charts)
+                add_ons[node["id"]] = addon_loader.build_add_on(b, f, node, charts)
+    if sub_documents:
+        sub_errors: list[Diagnostic] = []
+        subs = addon_loader.build_sub_instructions(sub_documents, sub_errors)
+        b.errors.extend(sub_errors)
+        if not sub_errors:
+            b.errors.extend(addon_loader.undefined_calls(list(add_ons.values()), subs))
 
     # cross-file references: error codes and interpretations
     codes = {e.code for e in errors}

@@ -5,7 +5,9 @@ are typed in from 003 §1.3.2 / §2.4 and docs/aoi.md, not read from the spec); 
 ``--json`` record; and that a broken add-on instruction or sub-instruction file in a
 copy of the spec gives located ``file:line:col: path: message`` lines on standard
 error, the error count, exit 1, nothing on standard output and no traceback, also
-through the installed console script and for ``generate`` and ``diagram``.  The line
+through the installed console script and for ``generate`` and ``diagram``; and that a
+copy validate refuses (a duplicated check id, a broken motion instruction file) is refused
+by every command that loads a spec, at the same place.  The line
 of each diagnostic is found by a marker unique to the change.
 """
 
@@ -224,6 +226,75 @@ def test_generate_and_diagram_report_a_broken_aoi(capsys: pytest.CaptureFixture[
     assert rc == 1 and out == "" and f"{path}:{line}:" in err
 
 
+# --------------------------------------------------------------------------- one validation for every command
+
+#: Every command that loads a spec, with the arguments that make it load ``--spec COPY``
+#: (``{spec}``: the copy, ``{tmp}``: a scratch directory); each must refuse what validate refuses.
+COMMANDS = {
+    "validate": ("validate", "{spec}"),
+    "simulate_aoi": ("simulate", "-q", str(ROOT / "scenarios" / "aoi" / "err_1017_negative_speed.yaml"), "--spec", "{spec}"),
+    "simulate_axis": ("simulate", "-q", str(ROOT / "scenarios" / "noncip" / "exec_prescan.yaml"), "--spec", "{spec}"),
+    "check": ("check", "--spec", "{spec}"),
+    "check_aoi": ("check", "--system", "aoi", "--spec", "{spec}"),
+    "export": ("export", "--spec", "{spec}", "-o", "{tmp}/model.pml"),
+    "generate": ("generate", "-o", "{tmp}/gen", "--spec", "{spec}", "--scenarios", "{tmp}"),
+    "docs": ("docs", "-o", "{tmp}/docs", "--spec", "{spec}", "--scenarios", "{tmp}"),
+    "diagram_aoi": ("diagram", AOI_ID, "--spec", "{spec}"),
+    "diagram_chart": ("diagram", "AxisNonCIP", "--spec", "{spec}"),
+    "vectors": ("vectors", "-o", "{tmp}/vectors", "--spec", "{spec}", "--quiet"),
+}
+
+#: Copies validate refuses: (file under the spec, text, replacement, marker on the line reported, words).
+BREAKS = {
+    # two checks with one id (the diagram's nodes and the reference's anchors need them unique)
+    "duplicate_check_id": ("addons/raM_Opr_SyncPthPhyAx_CD.yaml", "{id: handler_running, err: 1001,",
+                           "{id: registered, err: 1001,", "{id: registered, err: 1001,",
+                           ("add_on_instruction.checks[1].id", "duplicate check 'registered'")),
+    # a motion instruction the recovery calls, with an error code below 1
+    "sub_instruction_code": ("instructions/motion/MAM.yaml", "err: 17,", "err: -17,", "err: -17,",
+                             ("instruction.checks[1].err",)),
+    # a check of a motion instruction reading a name an axis does not offer
+    "sub_instruction_name": ("instructions/motion/MAM.yaml", '"axis.direct_control"', '"axis.zz_control"',
+                             "axis.zz_control", ("instruction.checks[0].fails", "unknown name(s) axis.zz_control")),
+}
+
+
+#: The breaks of a motion instruction file are tried on the commands that load no add-on
+#: world (they read those files only through the spec loader); the duplicated check id on all.
+CASES = [(c, "duplicate_check_id") for c in sorted(COMMANDS)] + [
+    (c, b) for b in ("sub_instruction_code", "sub_instruction_name")
+    for c in ("validate", "check", "export", "docs", "diagram_chart", "simulate_axis")]
+
+
+@pytest.mark.parametrize(("command", "broken"), CASES)
+def test_a_spec_validate_refuses_is_refused_by_every_command(capsys: pytest.CaptureFixture[str], spec_copy: Path,
+                                                              tmp_path: Path, command: str, broken: str) -> None:
+    rel, old, new, marker, words = BREAKS[broken]
+    path = edit(spec_copy / rel, old, new)
+    line = line_of(path, marker)
+    argv = [a.format(spec=spec_copy, tmp=tmp_path) for a in COMMANDS[command]]
+    rc, out, err = run(capsys, *argv)
+    assert rc == 1, (rc, out, err)
+    assert "Traceback" not in out + err
+    hits = [m for m in diagnostics(err) if m["file"] == str(path) and int(m["line"]) == line]
+    assert hits, f"no diagnostic at {path}:{line} in\n{err}"
+    for w in words:
+        assert any(w in m["rest"] for m in hits), (w, err)
+    assert "PASS" not in out and "spec OK" not in out
+    assert not (tmp_path / "gen").exists() and not (tmp_path / "vectors").exists()
+
+
+def test_an_add_on_call_of_a_missing_motion_instruction_is_refused(capsys: pytest.CaptureFixture[str],
+                                                                   spec_copy: Path) -> None:
+    (spec_copy / "instructions" / "motion" / "MAH.yaml").unlink()
+    path = aoi_file(spec_copy)
+    for argv in (("validate", str(spec_copy)), ("diagram", "AxisCIP", "--spec", str(spec_copy))):
+        rc, out, err = run(capsys, *argv)
+        assert rc == 1 and out == "" and "Traceback" not in err
+        assert f"{path}:{line_of(path, 'call: {instruction: MAH, axis: phy}')}:" in err
+        assert "unknown sub-instruction 'MAH'" in err
+
+
 def _env(**extra: str) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTEST", "COV_"))}
     env.update(extra)
@@ -254,3 +325,15 @@ def test_simulate_runs_the_add_on_instruction_of_the_spec_copy(capsys: pytest.Ca
     path = edit(aoi_file(spec_copy), 'fails_when: "handler.eState != 7"', 'fails_when: "hndlr_zz.eState != 7"')
     rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
     assert rc == 1 and f"{path}:{line_of(path, 'hndlr_zz')}:" in err and "Traceback" not in err
+
+
+def test_simulate_runs_the_motion_instructions_of_the_spec_copy(capsys: pytest.CaptureFixture[str],
+                                                                spec_copy: Path) -> None:
+    # RM002H p255: a zero MAM speed is ERR 13 (Parameter Out Of Range), which the add-on
+    # instruction reports as 1022 with that code in Sts_EXERR (003 §2.4)
+    scenario = ROOT / "scenarios" / "aoi" / "err_1022_mam_zero_speed.yaml"
+    rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
+    assert rc == 0, (out, err)
+    edit(spec_copy / "instructions" / "motion" / "MAM.yaml", "Speed <= 0\", err: 13,", "Speed <= 0\", err: 14,")
+    rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
+    assert rc == 1 and "Sts_EXERR expected 13, got 14" in out + err, (out, err)

@@ -47,22 +47,27 @@ settings.register_profile("deep", max_examples=2000, **_NOT_TIMED)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
 
 
-#: The test files that use the session's scenario runs (the ``scenario_runs`` fixture,
-#: about ten seconds): ``make test``'s file-by-file distribution (``--dist loadfile``)
-#: gives them to one worker together, so the scenarios run once, not once per worker.
-SCENARIO_RUN_FILES = frozenset({"test_aoi.py", "test_cip_chart.py", "test_mrhd_cip.py", "test_scenarios.py"})
+#: Test files that share one expensive thing, each group given to one worker by ``make
+#: test``'s file-by-file distribution (``--dist loadfile``): the session's scenario runs
+#: (the ``scenario_runs`` fixture, about ten seconds) run once, not once per worker, and
+#: the bundled conformance suite (about 45 s to generate when its content changed) is
+#: built by the worker that uses it, instead of one worker waiting for the other's build.
+SHARED_UNITS = {
+    **dict.fromkeys(("test_aoi.py", "test_cip_chart.py", "test_mrhd_cip.py", "test_scenarios.py"), "scenario runs"),
+    **dict.fromkeys(("test_conformance.py", "test_conformance_node.py"), "conformance suite"),
+}
 
 
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """``--dist loadfile``, with the files of :data:`SCENARIO_RUN_FILES` as one unit."""
+    """``--dist loadfile``, with each group of :data:`SHARED_UNITS` as one unit of work."""
     if config.getoption("dist", None) != "loadfile":
         return None
     from xdist.scheduler import LoadScopeScheduling
 
-    class _FileScheduling(LoadScopeScheduling):  # type: ignore[misc]  # xdist ships no stubs
+    class _FileScheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
             file = nodeid.split("::", 1)[0]
-            return "scenario runs" if Path(file).name in SCENARIO_RUN_FILES else file
+            return SHARED_UNITS.get(Path(file).name, file)
 
     return _FileScheduling(config, log)
 

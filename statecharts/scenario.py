@@ -222,6 +222,15 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             err((*p, "type"), f"unknown axis type {a['type']!r}; expected one of: {', '.join(axis_types)}")
             untyped.add(axis_name)
             continue
+        if "chart" in a and a["chart"] != chart.id:
+            # an axis type several charts model (AXIS_VIRTUAL): the axis chooses one of them
+            named = [c.id for c in spec.charts if a["type"] in c.axis_types]
+            if a["chart"] not in named:
+                err((*p, "chart"), f"chart {a['chart']!r} does not model axis type {a['type']!r}; "
+                                   f"expected one of: {', '.join(named)}")
+                untyped.add(axis_name)
+                continue
+            chart = spec.chart(a["chart"])
         charts[axis_name] = chart
         state = a.get("state")
         startable = [s.id for s in chart.states if s.kind not in (ir.StateKind.HISTORY, ir.StateKind.PARALLEL)]

@@ -337,6 +337,38 @@ def test_noncip_axis_faulted_setup_has_its_fault_latched(tmp_path: Path) -> None
     assert _run(tmp_path, body) == []
 
 
+def test_an_axis_chooses_its_chart_when_several_model_its_type(tmp_path: Path) -> None:
+    # INT-065: a virtual axis of the virtual axis chart is always under (virtual) servo
+    # control; RA37 mas lists AXIS_VIRTUAL among the axis types of MAS
+    body = """
+        setup:
+          axes:
+            V: {type: AXIS_VIRTUAL, chart: AxisVirtual}
+          program:
+            - {tag: mas, instruction: MAS, axis: V}
+        steps:
+          - expect:
+              V: {state: ServoControl, AxisState: 2, ServoActionStatus: true}
+          - rungs: {mas: true}
+            expect:
+              mas: {EN: true, DN: true, ER: false}
+        """
+    assert _run(tmp_path, body) == []
+
+
+def test_a_chart_that_does_not_model_the_axis_type_is_refused(tmp_path: Path) -> None:
+    text = _errors(tmp_path, """
+        setup:
+          axes:
+            V: {type: AXIS_VIRTUAL, chart: AxisCIP}
+        steps:
+          - expect:
+              V: {AxisState: 2}
+        """)
+    assert "s.yaml:6:36: setup.axes.V.chart" in text
+    assert "chart 'AxisCIP' does not model axis type 'AXIS_VIRTUAL'; expected one of: AxisNonCIP, AxisVirtual" in text
+
+
 # ------------------------------------------------------------------------ preset tag bits
 
 def test_preset_bits_meet_the_execution_table(tmp_path: Path) -> None:
@@ -387,7 +419,7 @@ LOADER_KEYS = {
     "": {"format", "name", "description", "sources", "covers", "setup", "steps"},
     # tags and prescan: set-up of a ladder program (statecharts/program/scenario.py)
     "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "program", "tags", "prescan"},
-    "/properties/setup/properties/axes/additionalProperties": {"type", "state", "variables"},
+    "/properties/setup/properties/axes/additionalProperties": {"type", "chart", "state", "variables"},
     "/properties/setup/properties/program/oneOf/0/items": {"tag", "instruction", "axis", "master", "operands", "preset"},
     # tags and always: steps of a scenario with a ladder program
     "/properties/steps/items": {"name", "prescan", "scans", "within", "rungs", "operands", "events", "expect", "set",

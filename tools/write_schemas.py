@@ -356,6 +356,8 @@ scenario = {
                              "type": "object", "additionalProperties": False, "required": ["type"],
                              "properties": {
                                  "type": {"type": "string"},
+                                 "chart": {**ID, "description": "The chart of the axis when several charts model its type "
+                                                                "(AXIS_VIRTUAL); default: the first."},
                                  "state": {"type": "string"},
                                  "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                              }}},

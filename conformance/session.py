@@ -171,6 +171,13 @@ class Session:
         for e in inputs.get("events", []):
             if e["axis"] not in system.axes:
                 raise SetupError(f"unknown axis {e['axis']!r} in the events")
+            chart = system.axes[e["axis"]].chart
+            kind = next((ev.kind for ev in chart.events if ev.name == e["event"]), None)
+            if kind not in ("environment", "drive"):
+                offered = ", ".join(ev.name for ev in chart.events if ev.kind in ("environment", "drive"))
+                what = "no event" if kind is None else f"a {kind} event, not an environment or drive event,"
+                raise SetupError(f"axis {e['axis']}: chart {chart.id} has {what} {e['event']!r}; the events a "
+                                 f"vector gives are: {offered}")
             events.append(EnvironmentEvent(e["axis"], e["event"]))
         si = ScanInputs(rungs=rungs, operands=operands, events=tuple(events), prescan=bool(inputs.get("prescan", False)))
         if self.record:

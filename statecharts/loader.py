@@ -341,19 +341,19 @@ def read_yaml(path: Path, errors: list[Diagnostic], *, what: str = "file") -> An
         return None
     # the project's own files' trees are kept; any file with the same bytes (a copy of
     # one) is read from that entry
+    remembered = _remembered_tree(name, raw)
+    if remembered is not None:  # read in this process already: neither parsed nor stored again
+        return remembered
     cacheable = _project_file(path)
-    if _remembered_tree(name, raw) is None:
-        from statecharts import tree_cache
+    from statecharts import tree_cache
 
-        cached = tree_cache.load(raw)
-        if cached is not None:
-            _remember_tree(name, raw, cached)
-            return cached
+    cached = tree_cache.load(raw)
+    if cached is not None:
+        _remember_tree(name, raw, cached)
+        return cached
     before = len(errors)
     tree = parse_yaml_bytes(name, raw, errors, what=what)
     if cacheable and tree is not None and len(errors) == before:
-        from statecharts import tree_cache
-
         tree_cache.store(raw, tree)
     return tree
 

@@ -354,13 +354,26 @@ def interpretation_citations(tree: Any) -> list[tuple[tuple[Any, ...], str]]:
     return out
 
 
+#: The problems of each source text already checked, per registry (a registry is a frozen
+#: value: the same catalog read again finds the same entry).
+_PROBLEMS: dict[Registry, dict[str, tuple[str, ...]]] = {}
+
+
 def tree_source_diagnostics(name: str, tree: Any, registry: Registry) -> list[Diagnostic]:
     """A located diagnostic for every ``source:`` of ``tree`` that does not resolve."""
     out = []
+    known = _PROBLEMS.get(registry)
+    if known is None:
+        if len(_PROBLEMS) >= 8:
+            _PROBLEMS.clear()
+        known = _PROBLEMS[registry] = {}
     for parts, value in iter_sources(tree):
         if not isinstance(value, str):
             continue  # the file's schema reports a source that is not text
-        for problem in source_problems(value, registry):
+        problems = known.get(value)
+        if problems is None:
+            problems = known[value] = tuple(source_problems(value, registry))
+        for problem in problems:
             line, col = locate(tree, parts)
             out.append(Diagnostic(name, line, col, node_path(parts), f"unresolvable source {value!r}: {problem}"))
     out.sort(key=lambda d: (d.line, d.column))

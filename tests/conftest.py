@@ -47,6 +47,56 @@ settings.register_profile("deep", max_examples=2000, **_NOT_TIMED)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE") or DEFAULT_PROFILE)
 
 
+#: Test files that share one expensive thing, each group given to one worker by ``make
+#: test``'s file-by-file distribution (``--dist loadfile``): the session's scenario runs
+#: (the ``scenario_runs`` fixture, about ten seconds) run once, not once per worker, and
+#: the bundled conformance suite (about 45 s to generate when its content changed) is
+#: built by the worker that uses it, instead of one worker waiting for the other's build.
+SHARED_UNITS = {
+    **dict.fromkeys(("test_aoi.py", "test_cip_chart.py", "test_mrhd_cip.py", "test_scenarios.py"), "scenario runs"),
+    **dict.fromkeys(("test_conformance.py", "test_conformance_node.py"), "conformance suite"),
+}
+
+
+#: The longest units of work (about a minute down to a quarter of one each, on the quiet
+#: machine), longest first: collected first, they are handed out first, and the short
+#: files fill the end of both workers' queues (with ``--no-loadscope-reorder``, which keeps
+#: the collection order; xdist would order by the number of tests).
+LONGEST_FIRST = ("conformance suite", "scenario runs", "test_loader_errors.py", "test_checker_compile.py",
+                 "test_exact_codes.py", "test_checker_aoi.py", "test_spin.py", "test_lint.py",
+                 "test_mrhd_servo.py", "test_checker_soundness.py", "test_scxml.py", "test_checker_core.py",
+                 "test_render.py", "test_cli_aoi.py")
+
+
+def unit_of(nodeid: str) -> str:
+    """The unit of work of a test: its file, or the group of :data:`SHARED_UNITS` it is in."""
+    file = nodeid.split("::", 1)[0]
+    return SHARED_UNITS.get(Path(file).name, file)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    rank = {u: i for i, u in enumerate(LONGEST_FIRST)}
+
+    def key(item: pytest.Item) -> int:
+        unit = unit_of(item.nodeid)
+        return rank.get(unit, rank.get(Path(unit).name, len(rank)))
+
+    items.sort(key=key)  # stable: within a unit, and among the others, the collection order
+
+
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadfile``, with each group of :data:`SHARED_UNITS` as one unit of work."""
+    if config.getoption("dist", None) != "loadfile":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class _FileScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return unit_of(nodeid)
+
+    return _FileScheduling(config, log)
+
+
 def pytest_report_header(config: pytest.Config) -> str:
     return f"hypothesis profile: {settings.get_current_profile_name()}"
 

@@ -266,6 +266,20 @@ def test_an_event_is_taken_before_the_eventless_transitions_its_actions_enable(s
         assert (obs["state"], obs["Timer"], obs["MajorFault"]) == ("Initializing", 0, False), backend
 
 
+def test_a_vector_event_that_is_a_request_is_refused(spec: Any) -> None:
+    """docs/conformance.md: a scan's events are environment (and drive) events; a request
+    such as shutdown comes from an instruction (MASD), so the adapter answers an error."""
+    adapter = ReferenceAdapter(spec)
+    setup = {"scan_ms": 10, "coarse_update_ms": 10, "program": [],
+             "axes": [{"name": "V", "type": "AXIS_VIRTUAL", "family": "AxisVirtual"}]}
+    assert adapter.handle({"type": "reset", "vector": "v", "setup": setup})["type"] == "ready"
+    answer = adapter.handle({"type": "scan", "index": 0, "inputs": {"events": [{"axis": "V", "event": "shutdown"}]}})
+    assert answer["type"] == "error"
+    assert "chart AxisVirtual has a request event, not an environment or drive event, 'shutdown'" in answer["message"]
+    answer = adapter.handle({"type": "scan", "index": 0, "inputs": {"events": [{"axis": "V", "event": "nonsense"}]}})
+    assert "chart AxisVirtual has no event 'nonsense'" in answer["message"]
+
+
 def test_the_reference_adapter_answers_match_the_message_schemas(spec: Any, vectors: list[dict[str, Any]]) -> None:
     a = ReferenceAdapter(spec)
     hello = a.handle({"type": "hello", "protocol": "motionchart-conformance/1"})

@@ -473,6 +473,19 @@ def test_traceability_comes_from_running_the_scenarios(spec: ir.Spec, tmp_path: 
     assert tr.producing("MSO", 12, 12) == [r] and tr.reaching("AxisNonCIP", "ServoControl") == []
 
 
+def test_a_traced_scenario_is_run_again_once_its_file_changes(spec: ir.Spec, tmp_path: Path) -> None:
+    root = tmp_path / "scenarios"
+    root.mkdir()
+    f = root / "shutdown_mso.yaml"
+    f.write_text(_SHUTDOWN_MSO)
+    (first,) = trace(spec, [root]).runs
+    assert trace(spec, [root]).runs == (first,) and first.passed
+    # a wrong expectation (ERR 13 where RM002H p79 gives 12): the edited file is run again
+    f.write_text(_SHUTDOWN_MSO.replace("ERR: 12,", "ERR: 13,"))
+    (again,) = trace(spec, [root]).runs
+    assert not again.passed and ("MSO", 12, 12) in again.errors
+
+
 def test_every_interpretation_page_entry_names_its_users(spec: ir.Spec) -> None:
     uses = interpretation_uses(spec)
     cited = {p.interpretation for c in spec.charts for p in

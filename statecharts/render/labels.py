@@ -9,6 +9,8 @@ IR records.
 
 from __future__ import annotations
 
+import functools
+import os
 import textwrap
 from collections.abc import Iterable
 from pathlib import Path
@@ -132,7 +134,13 @@ def spec_root(spec: ir.Spec) -> Path | None:
     """The directory the spec's files were read from (their common parent)."""
     if not spec.files:
         return None
-    paths = [Path(f).resolve() for f in spec.files]
+    return _common_parent(tuple(spec.files), os.getcwd())
+
+
+@functools.lru_cache(maxsize=64)
+def _common_parent(files: tuple[str, ...], cwd: str) -> Path:
+    """The common parent of ``files``, relative ones read from ``cwd`` (part of the key)."""
+    paths = [(Path(cwd) / f).resolve() for f in files]
     common = paths[0].parent
     while not all(common == p.parent or common in p.parents for p in paths):
         common = common.parent

@@ -16,6 +16,7 @@ being valid.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +24,7 @@ from pathlib import Path
 from statecharts import ir
 from statecharts.aoi import AoiScenario
 from statecharts.diagnostics import InputError
-from statecharts.scenario import load_scenario, run_scenario, scenario_files
+from statecharts.scenario import Scenario, load_scenario, run_scenario, scenario_files
 from statecharts.values import as_int
 
 
@@ -88,6 +89,24 @@ def display_path(path: Path, root: Path) -> str:
         return p.name
 
 
+#: What each scenario run exercised, kept for this process: a second ``generate`` (or
+#: ``docs``) over the same spec object and unchanged scenario files reuses the runs.  Only
+#: scenarios read from one file are kept (a ladder scenario also reads its program file).
+_RUNS: dict[tuple[int, str, str, str], tuple[ir.Spec, ScenarioRun]] = {}
+
+
+def _memo_key(spec: ir.Spec, f: Path, shown: str, scenario: object) -> tuple[int, str, str, str] | None:
+    if type(scenario) not in (Scenario, AoiScenario):
+        return None
+    try:
+        if not f.is_file():
+            return None
+        digest = hashlib.sha256(f.read_bytes()).hexdigest()
+    except OSError:
+        return None
+    return (id(spec), str(f.resolve()), digest, shown)
+
+
 def trace(spec: ir.Spec, roots: Sequence[Path | str],
           progress: Callable[[str, int | None, int | None], None] | None = None) -> Traceability:
     """Load and run every scenario under ``roots``; collect what each exercised.
@@ -110,6 +129,11 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str],
             where = f"line {first.line}: {first.message}" if first else str(exc)
             more = f" (and {len(exc.diagnostics) - 1} more)" if len(exc.diagnostics) > 1 else ""
             problems.append(ScenarioProblem(shown, f"does not load: {where}{more}"))
+            continue
+        key = _memo_key(spec, f, shown, scenario)
+        kept = _RUNS.get(key) if key is not None else None
+        if kept is not None and kept[0] is spec:
+            runs.append(kept[1])
             continue
         try:
             result = run_scenario(scenario, spec)
@@ -143,11 +167,14 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str],
                         errors.add((instr[obj], as_int(fields.get("ERR", 0)), as_int(fields.get("EXERR", 0))))
                     if fields.get("DN"):
                         done.add(instr[obj])
-        runs.append(ScenarioRun(
+        run = ScenarioRun(
             path=shown, name=scenario.name, passed=result.passed, scans=len(result.rows),
             covers=scenario.covers, sources=scenario.sources, states=frozenset(states),
             errors=frozenset(errors), done=frozenset(done), aoi_states=frozenset(aoi_states),
             aoi_errors=frozenset(aoi_errors), aoi_done=aoi_done,
-        ))
+        )
+        if key is not None:
+            _RUNS[key] = (spec, run)
+        runs.append(run)
     shown_root = ", ".join(sorted(Path(r).resolve().name for r in existing))
     return Traceability(tuple(sorted(runs)), tuple(sorted(problems)), shown_root)

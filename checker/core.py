@@ -45,6 +45,20 @@ Axes do not interact within a scan (a piece reads one tag and its own axis), so 
 block is stepped on its own and, on systems of several axes, the step of a block under
 no input is memoised per block.  Symmetry: blocks of interchangeable axes are sorted.
 
+A call that reads a second axis (MAG's checks read its master axis, ``master.X``) breaks
+that independence: its execution reads the master as it is before the coarse update, its
+delivery the master as the coarse update has left it so far.  When the master comes
+after its slave in axis order, both see the master's core at the start of the scan,
+which is part of the state: the slave's pieces are then memoised per master core (the
+slave's tables are swapped for the master core's before its block is stepped,
+:meth:`CompiledModel._bind_master`), and a choice on either block still changes that
+block only.  Otherwise (a master listed before its slave, a slave with two masters,
+interchangeable axes, a completion condition that reads the master and so sees it after
+the whole update) the successors are computed as the interpreter back-end computes them
+(:meth:`CompiledModel._coupled_successors`: decode, load, scan each enabled choice,
+encode); the states are still numbered, stored and searched by the core, and coverage
+is credited the same way.
+
 Complexity: one dict look-up per piece per scan once the pieces are known; the tables
 grow with the number of distinct parts, not with the number of states.
 
@@ -277,6 +291,13 @@ class CompiledModel:
         groups = self.symmetric_groups
         self._flat = (not self.has_prescan and len(groups) == 1 and len(groups[0]) == self.naxes > 1
                       and all(n == 1 for n in self.block_len))
+        #: a call reads another axis than its own (a bound master axis)
+        self.coupled = bool(model.masters)
+        #: slave axis -> its master axis, when the slave's pieces can be memoised per
+        #: master core (_bind_master); None: successors come from the interpreter
+        self._couple: dict[int, int] | None = self._couplings() if self.coupled else {}
+        self._bound: dict[int, int] = {}  # slave axis -> master core its tables are for
+        self._bundles: dict[tuple[int, int], tuple[list[dict[Any, Any]], list[dict[Any, Any]]]] = {}
 
     # ------------------------------------------------------------------ interning
 
@@ -1454,6 +1475,9 @@ class CompiledModel:
         or reach nothing) are left out: they add no state and no transition.  On systems
         of several axes the properties decided in the blocks a choice does not touch are
         reported with the nothing choice only (same parent, same depth)."""
+        couple = self._couple
+        if couple is None:
+            return self._coupled_successors(state)
         phase = state[0]
         mode = COARSE if phase % self.spu == 0 else NORMAL
         nphase = (phase + 1) % self.spu
@@ -1488,6 +1512,8 @@ class CompiledModel:
             start = starts[ai]
             n = lens[ai]
             key = (state[start:start + n], mode)
+            if couple and ai in couple:
+                self._bind_master(ai, state)
             r = own[ai].get(key)
             if r is None:
                 r = self.moves(ai, state, mode)
@@ -1536,6 +1562,8 @@ class CompiledModel:
             for ai in range(naxes):
                 start = self.block_start[ai]
                 n = self.block_len[ai]
+                if couple and ai in couple:
+                    self._bind_master(ai, state)
                 a2, t2, pb, pg = self.prescan_block(ai, state[start], state[start + 1:start + n])
                 v.append(a2)
                 v.extend(t2)
@@ -1543,3 +1571,90 @@ class CompiledModel:
                 p_good.extend(pg)
             out.append((self.prescan_index, canonical(v), p_bad, p_good))
         return out
+
+    def _coupled_successors(self, state: State) -> list[tuple[int, State, Sequence[Property], Sequence[Property]]]:
+        """:meth:`successors` of a system in which a call reads a second axis: every
+        enabled choice scanned by the model's own system from the decoded state (the
+        interpreter back-end's step), its successor encoded; coverage facts credited to
+        (:attr:`current`, choice) as the pieces credit theirs."""
+        model = self.model
+        flat = self.decode(state)
+        cov = self.cov
+        first = cov.first
+        out: list[tuple[int, State, Sequence[Property], Sequence[Property]]] = []
+        model.load(flat)
+        for n, ch in enumerate(model.enabled()):
+            if n:
+                model.load(flat)
+            succ, bad, good, facts = model.step(ch)
+            where = (self.current, ch.index)
+            for c, t in facts.fired:
+                cov.fired.add((c, t))
+                first.setdefault(("transition", c, t), where)
+            for m, st in facts.executed:
+                cov.executed.add((m, st))
+                first.setdefault(("cell", m, st), where)
+            for m, e, x in facts.errors:
+                cov.errors.add((m, e, x))
+                first.setdefault(("error", m, e, x), where)
+            for m, c in facts.checks:
+                cov.checks.add((m, c))
+                first.setdefault(("check", m, c), where)
+            out.append((ch.index, self.encode_flat(succ), bad, good))
+        return out
+
+    #: the memo tables of a tag's pieces that read its master axis (per tag, swapped)
+    _MASTER_TAG_TABLES = ("_exec", "_exec_by_view", "_finish", "_finish_by_view", "_deliver", "_prescan_tag")
+    #: the memo tables of an axis block's scan composed of those pieces (per axis, swapped)
+    _MASTER_AXIS_TABLES = ("_tail_memo", "_event_moves", "_block_memo", "_own_memo")
+
+    def _couplings(self) -> dict[int, int] | None:
+        """slave axis -> master axis when every slave's pieces can be memoised per master
+        core: each slave has one master, listed after it (so that at the slave's delivery
+        the coarse update has not reached the master yet), no axes are interchangeable,
+        and no completion condition, abort or process condition of a slave's call reads
+        the master (the last finishing of a scan comes after the master's update)."""
+        model = self.model
+        if self.symmetric_groups:
+            return None
+        index = {name: i for i, (name, _g) in enumerate(model.axis_defs)}
+        out: dict[int, int] = {}
+        for s in model.slots:
+            master = s.tag.master
+            if master is None:
+                continue
+            ai, mi = s.axis_index, index[master]
+            if mi <= ai or out.setdefault(ai, mi) != mi:
+                return None
+            ins = s.tag.instruction
+            conds = [c.fails_when for c in ins.aborts] + [e for e in (ins.done_when,) if e is not None]
+            if ins.process is not None:
+                conds += [e for e in (ins.process.complete_when, ins.process.ends_when) if e is not None]
+            if any(n.startswith("master.") for e in conds for n in e.names):
+                return None
+        return out
+
+    def _bind_master(self, ai: int, state: Sequence[int]) -> None:
+        """Make slave axis ``ai``'s memo tables those of its master's core in ``state``,
+        and load the master's axis with that core (what the slave's pieces read)."""
+        assert self._couple is not None
+        mi = self._couple[ai]
+        mcore = self._split[state[self.block_start[mi]]][0]
+        self._load_core(mi, mcore)
+        if self._bound.get(ai) == mcore:
+            return
+        tis = self.tis[ai]
+        bundle = self._bundles.get((ai, mcore))
+        if bundle is None:
+            bundle = ([{} for _ in self._MASTER_TAG_TABLES for _t in tis], [{} for _ in self._MASTER_AXIS_TABLES])
+            self._bundles[(ai, mcore)] = bundle
+        per_tag, per_axis = bundle
+        k = 0
+        for name in self._MASTER_TAG_TABLES:
+            tables = getattr(self, name)
+            for ti in tis:
+                tables[ti] = per_tag[k]
+                k += 1
+        for name, table in zip(self._MASTER_AXIS_TABLES, per_axis):
+            getattr(self, name)[ai] = table
+        self._bound[ai] = mcore

@@ -105,14 +105,26 @@ class ModelError(ValueError):
 
 
 def relevant_variables(spec: ir.Spec, chart: ir.Chart, instructions: Iterable[ir.Instruction],
-                       properties: Iterable[Property]) -> frozenset[str]:
+                       properties: Iterable[Property], followers: Iterable[ir.Instruction] = ()) -> frozenset[str]:
     """Cone of influence: chart variables that guards, checks, completion conditions,
-    aborts, request actions or properties read, closed under the actions that assign them."""
+    aborts, request actions or properties read, closed under the actions that assign them.
+    ``followers`` are the instructions called on other axes whose master-axis operand is
+    bound to an axis of this chart: what they read of their master (``master.X``) counts."""
     names = {v.name for v in chart.variables}
     need: set[str] = set()
 
     def axis_reads(expr_names: Iterable[str]) -> set[str]:
         return {n[5:] for n in expr_names if n.startswith("axis.") and n[5:] in names}
+
+    for ins in followers:
+        exprs = [c.fails_when for c in (*ins.checks, *ins.aborts)]
+        exprs += [e for e in (ins.done_when,) if e is not None]
+        if ins.process is not None:
+            exprs += [e for e in (ins.process.complete_when, ins.process.ends_when) if e is not None]
+        if ins.request is not None:
+            exprs += [a.value for a in ins.request.actions]
+        for read in exprs:
+            need |= {n[7:] for n in read.names if n.startswith("master.") and n[7:] in names}
 
     for t in chart.transitions:
         if t.guard is not None:
@@ -300,6 +312,8 @@ class Model:
         self.program = sysdef.program()
         self.params = {"scan_ms": sysdef.scan_ms, "coarse_update_ms": sysdef.coarse_update_ms}
         self.assignments = initial_assignments(sysdef)
+        #: tag -> the axis bound to its master-axis operand (MAG's MasterAxis)
+        self.masters = sysdef.masters()
         self.system = self.build_system(self.assignments[0])
         self.spu = self.system.scans_per_update
         # AxisInstance or the back end's axes (FastAxis), used through their common interface
@@ -313,9 +327,12 @@ class Model:
         # cone of influence and the collapse abstraction
         problems: list[Diagnostic] = []
         self.collapse_index: dict[str, dict[int, object]] = {}
+        group_of = dict(self.axis_defs)
         for cid, chart in self.charts.items():
             instructions = [spec.instruction(m) for _a, g in self.axis_defs if g.chart == cid for m in g.program]
-            relevant = relevant_variables(spec, chart, instructions, self.properties)
+            followers = [self.system.tags[t].instruction for t, master in self.masters.items()
+                         if group_of[master].chart == cid]
+            relevant = relevant_variables(spec, chart, instructions, self.properties, followers)
             idx: dict[int, object] = {}
             for name in sysdef.collapse:
                 if name not in {v.name for v in chart.variables}:
@@ -463,8 +480,11 @@ class Model:
         return c
 
     def _breaks_symmetry(self, members: list[int]) -> bool:
-        """Axis-specific properties would break symmetry; ours are all quantified."""
-        return False
+        """Axis-specific properties would break symmetry (ours are all quantified); an axis
+        that another axis's call names as its master is not interchangeable with the
+        others of its group."""
+        names = {self.axis_defs[i][0] for i in members}
+        return any(master in names for master in self.masters.values())
 
     def build_system(self, assignment: Sequence[int], backend: Callable[..., object] | None = None) -> System:
         """A fresh concrete system in the initial state chosen by ``assignment``."""
@@ -477,7 +497,7 @@ class Model:
                              parameters=self.params))
         # motion=False: the drive model's arithmetic is abstracted away (its events are inputs)
         return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
-                      coarse_update_ms=self.sysdef.coarse_update_ms, motion=False)
+                      coarse_update_ms=self.sysdef.coarse_update_ms, masters=self.masters, motion=False)
 
     # -- state <-> system -----------------------------------------------------------
 

@@ -186,6 +186,9 @@ def _mask(props: Sequence[Property], bit: dict[str, int]) -> int:
 def compute_tables(model: Model, *, progress: Callable[[int], None] | None = None) -> PromelaModel:
     """The table classes of ``model``: the closure of each class's initial blocks."""
     core = CompiledModel(model)
+    if core.coupled:
+        raise ExportError("a call reads a second axis (a bound master axis): the axes' tables are not "
+                          "independent; check this system with `motionchart check`")
     asserted = [p for p in model.properties if p.kind in ("invariant", "response", "reachable", "deadlock_free")]
     if len(asserted) > MAX_PROPERTIES:
         raise ExportError(f"{len(asserted)} properties to assert; a model holds at most {MAX_PROPERTIES}")

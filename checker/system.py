@@ -7,7 +7,9 @@ A system (``format: motionchart-system/1``, schema ``spec/schema/system.schema.j
 chooses axis groups (an axis type, the chart when several charts model that type, how
 many identical axes, the initial state and variables, and a list of *configurations*:
 alternative initial variable values, each of which is explored), the program (one MOTION_INSTRUCTION tag per instruction per
-axis; by default every instruction defined for the axis chart), operand domains
+axis; by default every instruction defined for the axis chart) with the axis bound to
+the master-axis operand of a call that has one (``masters:``, MAG's Master Axis: an
+axis of another group), operand domains
 (the instruction's ``domain`` unless overridden here), the environment events offered
 (by default the chart's events of kind ``environment``), whether prescan passes are
 offered, the scan and coarse-update periods, and the abstractions the search may use
@@ -55,6 +57,9 @@ class AxisGroup:
     variables: tuple[tuple[str, object], ...]
     configurations: tuple[Configuration, ...]
     program: tuple[str, ...]  # instruction mnemonics, one tag each per axis
+    #: (instruction, axis) bindings of the master-axis operands of the program's calls
+    #: (MAG's MasterAxis); the axis is an axis name of the system or a group's name
+    masters: tuple[tuple[str, str], ...] = ()
 
     def axis_names(self) -> tuple[str, ...]:
         if self.count == 1:
@@ -87,6 +92,17 @@ class SystemDef:
     def program(self) -> list[tuple[str, str, str]]:
         """(tag, instruction, axis) in program order: axis by axis, instructions as listed."""
         return [(self.tag_name(a, m), m, a) for a, g in self.axes() for m in g.program]
+
+    def masters(self) -> dict[str, str]:
+        """tag -> the axis bound to its instruction's master-axis operand (a group's name
+        stands for the group's first axis)."""
+        first = {g.name: g.axis_names()[0] for g in self.groups}
+        names = {a for a, _g in self.axes()}
+        out: dict[str, str] = {}
+        for a, g in self.axes():
+            for m, master in g.masters:
+                out[self.tag_name(a, m)] = master if master in names else first.get(master, master)
+        return out
 
     def domain(self, ins: ir.Instruction, op: ir.Operand) -> tuple[object, ...]:
         for i, o, values in self.operand_domains:
@@ -141,6 +157,7 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
         errors.append(Diagnostic(name, line, col, node_path(parts), message))
 
     groups: list[AxisGroup] = []
+    bindings: list[tuple[int, str, dict[str, str]]] = []  # (group index, group name, masters)
     seen_names: set[str] = set()
     charts_used: dict[str, ir.Chart] = {}
     for i, g in enumerate(doc["axes"]):
@@ -186,7 +203,11 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
             check_vars(c.get("variables", {}), (*p, "configurations", j, "variables"))
             configs.append(Configuration(str(c["name"]), tuple(sorted(dict(c.get("variables", {})).items())),
                                          str(c.get("description", ""))))
-        default_program = [ins.id for ins in spec.instructions if chart.id in ins.charts]
+        masters = dict(g.get("masters", {}))
+        # an instruction with a master-axis operand (MAG) needs a binding: by default the
+        # program is every instruction of the chart that has none, and those bound
+        default_program = [ins.id for ins in spec.instructions
+                           if chart.id in ins.charts and (ins.master_operand is None or ins.id in masters)]
         program = list(g.get("program", default_program))
         for j, m in enumerate(program):
             try:
@@ -196,12 +217,40 @@ def load_system(path: Path | str, spec: ir.Spec) -> SystemDef:
                 continue
             if chart.id not in ins.charts:
                 err((*p, "program", j), f"{m} is not defined for chart {chart.id}")
+            elif ins.master_operand is not None and m not in masters:
+                err((*p, "program", j), f"{m} needs its {ins.master_operand} operand bound to another axis of the "
+                                        f"system: `masters: {{{m}: AXIS}}` in this axis group")
         if len(set(program)) != len(program):
             err((*p, "program"), "an instruction is listed twice; each call has its own tag, list it once")
+        for m in masters:
+            if m not in program:
+                err((*p, "masters", m), f"{m} is not in the program of axis group {g['name']!r}; "
+                                        f"program: {', '.join(program) or '(none)'}")
+                continue
+            try:
+                if spec.instruction(m).master_operand is None:
+                    err((*p, "masters", m), f"{m} has no master-axis operand")
+            except KeyError:
+                pass  # reported with the program
+        bindings.append((i, g["name"], masters))
         groups.append(AxisGroup(
             name=g["name"], axis_type=g["type"], chart=chart.id, count=int(g.get("count", 1)), state=state,
             variables=tuple(sorted(variables.items())), configurations=tuple(configs), program=tuple(program),
+            masters=tuple(sorted(masters.items())),
         ))
+
+    # the master axes: another axis of the system (a group's own axes are not its masters)
+    axis_names = {a: grp.name for grp in groups for a in grp.axis_names()}
+    group_names = {grp.name for grp in groups}
+    for i, gname, masters in bindings:
+        for m, master in masters.items():
+            where = ("axes", i, "masters", m)
+            owner = axis_names.get(master, master if master in group_names else None)
+            if owner is None:
+                err(where, f"unknown axis {master!r}; axes of the system: {', '.join(axis_names)}")
+            elif owner == gname:
+                err(where, f"the master axis of {m} is an axis of its own group {gname!r}; "
+                           "bind it to an axis of another group")
 
     op_domains: list[tuple[str, str, tuple[object, ...]]] = []
     for mnemonic, ops in doc.get("operands", {}).items():

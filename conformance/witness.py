@@ -87,7 +87,8 @@ class WitnessModel(Model):
         plain = super().build_system(assignment, backend)
         # the model's scan rules unchanged: the drive model's outcomes stay inputs (motion off)
         return RecordingSystem(self.spec, list(plain.axes.values()), self.program, scan_ms=self.sysdef.scan_ms,
-                               coarse_update_ms=self.sysdef.coarse_update_ms, motion=plain.motion)
+                               coarse_update_ms=self.sysdef.coarse_update_ms, masters=self.masters,
+                               motion=plain.motion)
 
 
 def split_fired(chart: str, fired: Sequence[str]) -> tuple[list[str], list[str], list[str]]:

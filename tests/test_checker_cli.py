@@ -217,3 +217,76 @@ def test_a_system_chooses_the_chart_of_a_type_several_charts_model(tmp_path: Pat
 def test_list_systems(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = _run(["--list-systems"], capsys)
     assert code == 0 and "noncip" in out and "noncip_pairs" in out
+
+
+GEARED_SYSTEM = """\
+format: motionchart-system/1
+name: geared
+axes:
+  - name: Slave
+    type: AXIS_VIRTUAL
+    chart: AxisVirtual
+    state: ServoControl
+    program: [MAG_VIRTUAL]
+    masters: {MAG_VIRTUAL: Master}
+  - name: Master
+    type: AXIS_VIRTUAL
+    chart: AxisVirtual
+    state: ServoControl
+    program: [MAH_VIRTUAL]
+environment: [home_complete]
+prescan: false
+max_live_calls: 1
+abstraction:
+  collapse: [ActualPosition, CommandVelocity, GearRatio, HomePosition]
+"""
+
+#: a mistake in the master binding of GEARED_SYSTEM -> (old text, new text, the line's
+#: marker, what the message says)
+BAD_BINDINGS = {
+    "unknown-axis": ("{MAG_VIRTUAL: Master}", "{MAG_VIRTUAL: Zmaster}", "Zmaster", "unknown axis 'Zmaster'"),
+    "own-group": ("{MAG_VIRTUAL: Master}", "{MAG_VIRTUAL: Slave}", "masters:",
+                  "the master axis of MAG_VIRTUAL is an axis of its own group 'Slave'"),
+    "missing": ("    masters: {MAG_VIRTUAL: Master}\n", "", "program: [MAG_VIRTUAL]",
+                "MAG_VIRTUAL needs its MasterAxis operand bound to another axis of the system"),
+    "not-in-program": ("program: [MAG_VIRTUAL]", "program: [MAH_VIRTUAL]", "masters:",
+                       "MAG_VIRTUAL is not in the program of axis group 'Slave'"),
+    "no-master-operand": ("program: [MAG_VIRTUAL]\n    masters: {MAG_VIRTUAL: Master}",
+                          "program: [MAG_VIRTUAL, MAH_VIRTUAL]\n    masters: {MAG_VIRTUAL: Master, MAH_VIRTUAL: Master}",
+                          "MAH_VIRTUAL: Master", "MAH_VIRTUAL has no master-axis operand"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_BINDINGS))
+def test_a_bad_master_binding_is_located(tmp_path: Path, capsys: pytest.CaptureFixture[str], case: str) -> None:
+    old, new, marker, message = BAD_BINDINGS[case]
+    assert old in GEARED_SYSTEM
+    text = GEARED_SYSTEM.replace(old, new)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text, encoding="utf-8")
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if marker in t)
+    code, _, err = _run(["--system", str(bad)], capsys)
+    assert code == 1 and f"{bad}:{line}:" in err and message in err, err
+    assert "Traceback" not in err
+
+
+def test_a_slave_errs_while_its_master_homes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """MAG on the slave while the master axis homes: Home In Process (ERR 16; IMD, MAG
+    ERR 16 while the master homes); the check reads the bound master, not the slave."""
+    from checker.model import Model
+    from checker.search import explore
+
+    good = tmp_path / "geared.yaml"
+    good.write_text(GEARED_SYSTEM, encoding="utf-8")
+    spec = load_spec()
+    from checker.system import load_system
+    sysdef = load_system(good, spec)
+    assert sysdef.masters() == {"Slave_MAG_VIRTUAL": "Master"}
+    result = explore(Model(spec, sysdef), progress=False)
+    assert result.complete
+    assert ("MAG_VIRTUAL", 16, 0) in result.coverage.errors
+    assert ("MAG_VIRTUAL", "master_homing") in result.coverage.checks
+    # the slave itself never homes here (it has no MAH): its own homing check never fails
+    assert ("MAG_VIRTUAL", "homing") not in result.coverage.checks
+    code, out, _ = _run(["--system", str(good)], capsys)
+    assert code == 0, out

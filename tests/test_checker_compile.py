@@ -195,14 +195,15 @@ def test_system_gives_the_same_observations_on_both_back_ends(spec: ir.Spec, cha
     fault_action = "FaultAction" in {v.name for v in chart.variables}
     setups = {a: {"FaultAction": data.draw(st.sampled_from(["Shutdown", "DisableDrive", "StatusOnly"]))}
               if fault_action else {} for a in axes}
-    # instructions with a second axis operand (MAG's master) need a binding this system has not
-    program = [(f"{a}_{i.id}", i.mnemonic, a) for a in axes for i in spec.instructions
-               if chart.id in i.charts and i.master_operand is None]
+    program = [(f"{a}_{i.id}", i.mnemonic, a) for a in axes for i in spec.instructions if chart.id in i.charts]
     tags = {t: m for t, m, _a in program}
+    # an instruction with a second axis operand (MAG's master) follows the other axis
+    masters = {f"{a}_{i.id}": b for a, b in zip(axes, reversed(axes)) for i in spec.instructions
+               if chart.id in i.charts and i.master_operand is not None}
 
     def build(make: type) -> System:
         return System(spec, [make(chart, a, variables=setups[a], parameters=params) for a in axes], program,
-                      scan_ms=scan_ms, coarse_update_ms=coarse_ms)
+                      scan_ms=scan_ms, coarse_update_ms=coarse_ms, masters=masters)
 
     engine, fast = build(AxisInstance), build(FastAxis)
     for k in range(data.draw(st.integers(1, 30))):
@@ -245,7 +246,7 @@ def _same_run_on_both_back_ends(spec: ir.Spec, sd: SystemDef, data: st.DataObjec
     def build(make: type) -> System:
         return System(spec, [make(spec.chart(c), n, state=st_, variables=v, parameters=params)
                              for n, c, v, st_ in axes], program,
-                      scan_ms=sd.scan_ms, coarse_update_ms=sd.coarse_update_ms, motion=motion)
+                      scan_ms=sd.scan_ms, coarse_update_ms=sd.coarse_update_ms, masters=sd.masters(), motion=motion)
 
     engine, fast = build(AxisInstance), build(FastAxis)
     assert engine.snapshot() == fast.snapshot()

@@ -152,3 +152,31 @@ def test_stored_state_is_compact(spec: ir.Spec, base: SystemDef) -> None:
     result = explore(Model(spec, base, load_properties(spec)), progress=False, max_states=20000)
     per_state = stored_bytes(result) / result.states
     assert per_state < 200, per_state
+
+
+@pytest.mark.parametrize("order", ["slave_first", "master_first"])
+def test_a_slave_and_its_master_axis_agree(spec: ir.Spec, order: str) -> None:
+    """A call that reads a second axis (MAG's checks read its bound master): with the
+    master after its slave the core memoises the slave's pieces per master core, with
+    the master first it expands states on the interpreter; both build the interpreter's
+    graph, coverage and witnesses."""
+    import dataclasses
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "conformance" / "systems" / "mag_virtual.yaml"
+    sysdef = dataclasses.replace(load_system(path, spec), prescan=False)
+    if order == "master_first":
+        sysdef = dataclasses.replace(sysdef, groups=tuple(reversed(sysdef.groups)))
+    assert sysdef.groups[0].name == ("Slave" if order == "slave_first" else "Master")
+    props = load_properties(spec)
+    compiled = explore(Model(spec, sysdef, props), progress=False, witnesses=True)
+    from checker.core import CompiledModel
+
+    core = compiled.core
+    assert isinstance(core, CompiledModel)
+    assert (core._couple is None) == (order == "master_first")
+    interpreted = explore_interpreted(Model(spec, sysdef, props), progress=False, witnesses=True)
+    assert compiled.complete and compiled.states > 1000
+    _same(compiled, interpreted)
+    assert set(compiled.coverage.first) == set(interpreted.coverage.first)
+    assert ("MAG_VIRTUAL", "master_homing") in compiled.coverage.checks

@@ -27,8 +27,9 @@ from checker.system import SystemDef, SystemError_, bundled_systems, load_system
 from statecharts import ir
 from statecharts.engine import AxisInstance
 
-#: The systems the soundness run explores: every bundled one, and ``two_axes`` (below).
-SYSTEMS = ("cip", "motion", "noncip", "noncip_pairs", "two_axes")
+#: The systems the soundness run explores: every bundled one, ``two_axes`` and a slave
+#: axis geared to a master axis, listed after it and before it (below).
+SYSTEMS = ("cip", "motion", "noncip", "noncip_pairs", "two_axes", "geared", "geared_master_first")
 #: The add-on instruction's world has a system format of its own (``motionchart-aoi-system/1``):
 #: its charts run on the engine alone (statecharts.aoi.ChartRunner) and the checker's model
 #: cannot load it, so there is no second back-end to compare it with yet.
@@ -42,6 +43,13 @@ def _systems(spec: ir.Spec) -> dict[str, SystemDef]:
     base = out["noncip"]
     g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MDO", "MASD", "MAFR"))
     out["two_axes"] = dataclasses.replace(base, name="two_axes", groups=(g,), max_live_calls=1)
+    # a slave axis whose MAG reads its bound master axis (a conformance system), and the
+    # same with the master listed first (the core then expands states on the interpreter)
+    from pathlib import Path
+    geared = load_system(Path(__file__).resolve().parents[1] / "conformance" / "systems" / "mag_virtual.yaml", spec)
+    out["geared"] = geared
+    out["geared_master_first"] = dataclasses.replace(geared, name="geared_master_first",
+                                                     groups=tuple(reversed(geared.groups)))
     return out
 
 
@@ -79,7 +87,7 @@ def _offered(model: Model, snapshot: tuple[object, ...]) -> list[int]:
 
 
 def test_every_bundled_system_is_explored() -> None:
-    assert set(bundled_systems()) | {"two_axes"} == set(SYSTEMS)
+    assert set(bundled_systems()) | {"two_axes", "geared", "geared_master_first"} == set(SYSTEMS)
 
 
 @pytest.mark.parametrize("name", SYSTEMS)

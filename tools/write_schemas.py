@@ -434,6 +434,10 @@ system = {
                 "variables": {"type": "object", "additionalProperties": SCALAR},
                 "configurations": {"type": "array", "minItems": 1, "items": SYSTEM_CONFIG},
                 "program": {"type": "array", "items": ID},
+                "masters": {"type": "object", "propertyNames": ID, "additionalProperties": ID,
+                            "description": "The axis bound to the master-axis operand of an instruction of `program` "
+                                           "that has one (MAG's MasterAxis): instruction -> the name of an axis (or "
+                                           "axis group, meaning its first axis) of another group of the system."},
             }}},
         "operands": {"type": "object", "additionalProperties": {
             "type": "object", "additionalProperties": {"type": "array", "items": SCALAR, "minItems": 1}}},

@@ -127,6 +127,17 @@ def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> Non
         terminalreporter.write_line(f"{max(reported)} deselected (`make deep` runs those marked deep)")
 
 
+def examples(fast: int, deep: int | None = None) -> int:
+    """The number of examples of a long property test: ``fast`` under ``make test``'s
+    profile (``ci``; at most the profile's count under ``dev``), ``deep`` (else the
+    profile's own count) under ``make deep``'s profile."""
+    profile = settings.get_current_profile_name()
+    current = settings().max_examples
+    if profile == "deep":
+        return deep if deep is not None else current
+    return min(fast, current)
+
+
 def sampled(values: Iterable[Any], fast: Container[Any]) -> list[Any]:
     """Parameters of a long exploration: those in ``fast`` run in ``make test`` (the fast
     sample), the others only in ``make deep`` (marked ``deep``, deselected by default)."""

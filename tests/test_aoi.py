@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from conftest import ScenarioRuns
+from conftest import ScenarioRuns, examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -186,7 +186,7 @@ def _result(world: aoi.World) -> tuple[int, int, str]:
 
 # --------------------------------------------------------------------------- oracle agreement
 
-@settings(max_examples=3000)
+@settings(max_examples=examples(1000, deep=3000))
 @given(worlds())
 def test_engine_agrees_with_the_oracle(w: dict[str, Any]) -> None:
     world = _world(w)

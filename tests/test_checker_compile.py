@@ -15,6 +15,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from conftest import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -183,6 +184,7 @@ def _scan_inputs(draw: st.DrawFn, spec: ir.Spec, tags: dict[str, str], axes: lis
 
 
 @pytest.mark.parametrize("chart_id", BUNDLED_CHARTS)
+@settings(max_examples=examples(40))  # make deep: the deep profile's count
 @given(data=st.data())
 def test_system_gives_the_same_observations_on_both_back_ends(spec: ir.Spec, chart_id: str,
                                                               data: st.DataObject) -> None:

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from conftest import examples
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from ruamel.yaml import YAML
@@ -830,7 +831,8 @@ def fuzz_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return d
 
 
-@settings(suppress_health_check=[HealthCheck.data_too_large])  # whole spec files are drawn
+@settings(suppress_health_check=[HealthCheck.data_too_large],  # whole spec files are drawn
+          max_examples=examples(40))  # make deep: 2000, and tests/fuzzing.py 10,000 specs
 @given(mutation=_mutations())
 def test_fuzz_damaged_spec_raises_only_spec_error(fuzz_dir: Path, mutation: tuple[str, bytes]) -> None:
     rel, data = mutation

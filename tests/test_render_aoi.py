@@ -26,11 +26,12 @@ from checker import cli
 from statecharts import ir
 from statecharts.loader import load_spec
 from statecharts.render import graphviz_bin, instruction_dot, instruction_mermaid
-from statecharts.render.addon import addon_page, recovery_chart
+from statecharts.render.addon import recovery_chart
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import build_flowchart, split_flowchart
 from statecharts.render.generate import build
 from statecharts.render.mermaid import chart_mermaid
+from statecharts.render.reference import add_on_page
 from statecharts.render.traceability import trace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,7 +66,7 @@ def aoi(spec: ir.Spec) -> ir.AddOnInstruction:
 
 @pytest.fixture(scope="module")
 def page(spec: ir.Spec, aoi: ir.AddOnInstruction) -> str:
-    return addon_page(spec, aoi, trace(spec, []))
+    return add_on_page(spec, aoi, trace(spec, []))
 
 
 def section(page: str, title: str) -> str:
@@ -151,6 +152,39 @@ def test_page_lists_parameters_status_and_local_tags(page: str) -> None:
     assert "MAS" in routines["rung false"]["Also"] and "path_verified" in routines["prescan"]["Also"]
 
 
+def test_page_shows_completion_and_the_objects_it_reads_with_their_sources(page: str) -> None:
+    # SYNC-RM §1.2 note: a path-to-physical sync (SyncType 0) verifies the path's integrity
+    # (what 1016 checks); §1.3.1: Sts.OnPath of the handler is set on completion
+    done = {r["Sets"].strip("`"): r for r in table_rows(section(page, "Completion"))}
+    assert list(done) == ["path_verified", "handler.OnPath"]
+    assert "Cfg_SyncType == 0" in done["path_verified"]["When"] and done["handler.OnPath"]["When"] == "always"
+    assert done["path_verified"]["Source"].startswith("SYNC-RM §1.2") and "§1.3.1" in done["handler.OnPath"]["Source"]
+    # 003 §2.2: the physical axis is an AXIS_CIP_DRIVE, the path axis an AXIS_VIRTUAL, and the handle
+    world = section(page, "The world it runs in")
+    split = world.index("| Object | Fact |")
+    objects = {r["Object"].strip("`"): r for r in table_rows(world[:split])}
+    assert list(objects) == ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL", "handler"]
+    assert objects["AXIS_CIP_DRIVE"]["Chart"] == "[AxisCIP](../charts/AxisCIP.md)"
+    assert all(r["Source"].startswith("SYNC-RM §") for r in objects.values())
+    facts = table_rows(world[split:])
+    assert {"faulted", "shutdown", "energized"} <= {r["Fact"].strip("`") for r in facts if r["Object"] == "`AXIS_VIRTUAL`"}
+    assert all(r["Source"] not in ("", "—") for r in facts)
+
+
+def test_links_into_the_page_name_its_anchors(tmp_path: Path, spec: ir.Spec) -> None:
+    """Every ``instructions/<AOI>.md#fragment`` link of the reference (the users of each
+    interpretation) lands on an anchor or a heading of the page."""
+    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
+    files = build(spec, [], tmp_path, render_svg=fake).files
+    page = files[f"instructions/{AOI_ID}.md"].decode()
+    anchors = set(re.findall(r'<a id="([^"]+)"></a>', page)) | {
+        re.sub(r"[^a-z0-9 _-]", "", h.lower()).replace(" ", "-") for h in re.findall(r"^#+ (.+)$", page, re.M)}
+    links = {m for text in files.values() if text.lstrip().startswith(b"<!--")
+             for m in re.findall(rf"instructions/{AOI_ID}\.md#([^)\s]+)\)", text.decode())}
+    assert {"transition-t1", "state-virtual_done", "check-energized", "the-world-it-runs-in"} <= links
+    assert links <= anchors, links - anchors
+
+
 def test_calls_link_to_the_variant_for_the_axis_data_type(spec: ir.Spec, page: str) -> None:
     rows = table_rows(section(page, "Motion instructions it calls"))
     got = {r["Call"].strip("`").split("(")[0].split("_")[0]: r for r in rows}
@@ -166,7 +200,7 @@ def test_calls_link_to_the_variant_for_the_axis_data_type(spec: ir.Spec, page: s
 
 def test_page_is_deterministic_and_has_no_absolute_path(spec: ir.Spec, page: str) -> None:
     again = load_spec()
-    assert addon_page(again, again.add_on(AOI_ID), trace(again, [])) == page
+    assert add_on_page(again, again.add_on(AOI_ID), trace(again, [])) == page
     assert str(ROOT) not in page and str(Path.home()) not in page
 
 

@@ -16,6 +16,7 @@ accepts, and the artefacts written by ``generate`` / ``docs`` and drawn by ``dia
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import re
 from pathlib import Path
@@ -237,6 +238,25 @@ def test_flowchart_ends_where_the_recovery_chart_takes_over(spec: ir.Spec, aoi: 
     assert [n.kind for n in fc.nodes if n.id == "recovery"] == ["done"]
     assert f"{AOI_ID}_recovery" in " ".join(fc.note)
     assert "flowchart TD" in instruction_mermaid(spec, aoi)
+
+
+def test_flowchart_and_page_name_the_status_tag_the_instruction_has(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    """The error boxes, the code columns and the recovery's actions name the members of the
+    instruction's own status tag: renamed there, renamed everywhere."""
+    def out(name: str) -> str:
+        return name.replace("Sts_", "Out_", 1)
+
+    other = dataclasses.replace(
+        aoi, status=tuple(dataclasses.replace(m, name=out(m.name)) for m in aoi.status),
+        rung_false=dataclasses.replace(aoi.rung_false, clear=tuple(map(out, aoi.rung_false.clear))),
+        prescan=dataclasses.replace(aoi.prescan, clear=tuple(map(out, aoi.prescan.clear))))
+    boxes = [n for n in build_flowchart(spec, other).nodes if n.kind == "error"]
+    assert boxes[0].title[:2] == ("Out_ER set", f"Out_ERR = {CHECK_ORDER[0]}")
+    assert not any("Sts_" in line for n in boxes for line in n.title)
+    page = add_on_page(spec, other, trace(spec, []))
+    assert "Out_ERR" in table_rows(section(page, "Checks, in the order they are evaluated"))[0]
+    mmd = chart_mermaid(recovery_chart(spec, other, ordered=True))
+    assert f"Out_ERR = {CALL_CODES['MAH']}" in mmd and "Out_EXERR = MAH.ERR" in mmd and "Sts_" not in mmd
 
 
 # --------------------------------------------------------------------------- recovery chart

@@ -319,6 +319,23 @@ def test_build_writes_the_aoi_artefacts(tmp_path: Path, spec: ir.Spec, aoi: ir.A
     assert not any(name.startswith("aoi/") for name in files)
 
 
+def test_traceability_matrix_lists_the_add_on_states_codes_and_completion(tmp_path: Path, spec: ir.Spec) -> None:
+    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
+    matrix = build(spec, [], tmp_path, render_svg=fake).files["traceability.md"].decode()
+    page = f"instructions/{AOI_ID}.md"
+    codes = [r for r in table_rows(section(matrix, "Error codes")) if r["Instruction"] == f"[{AOI_ID}]({page})"]
+    assert [int(r["ERR / EXERR"].split("]")[0][1:]) for r in codes] == ALL_CODES  # 003 §2.4
+    for r in codes:
+        assert r["ERR / EXERR"].endswith(f"({page}#code-{r['ERR / EXERR'].split(']')[0][1:]})")
+    by_code = {int(r["ERR / EXERR"].split("]")[0][1:]): r["Spec elements (checks)"] for r in codes}
+    for mnemonic, code in CALL_CODES.items():  # docs/aoi.md: the calling state reports the call's error
+        assert f"when its {mnemonic} call errs" in by_code[code]
+    states = [r["State"] for r in table_rows(section(matrix, "States")) if r["Chart"].startswith(f"[{AOI_ID}_recovery]")]
+    assert states == [f"[{s.id}]({page}#state-{s.id})" for s in spec.add_on(AOI_ID).recovery.states]
+    done = [r for r in table_rows(section(matrix, "Completion (DN)")) if r["Instruction"] == f"[{AOI_ID}]({page})"]
+    assert len(done) == 1 and "Sts_PC" in done[0]["Spec element"]
+
+
 def test_docs_command_writes_the_aoi_page(tmp_path: Path) -> None:
     out = tmp_path / "ref"
     code, _msg, err = run(["docs", "-o", str(out), "--scenarios", str(ROOT / "scenarios")])

@@ -552,6 +552,12 @@ def add_on_codes(spec: ir.Spec, a: ir.AddOnInstruction, tr: Traceability, prefix
         for e in sorted(a.errors, key=lambda e: e.code)]
 
 
+def recovery_reaching(chart: ir.Chart, tr: Traceability) -> Callable[[str], list[ScenarioRun]]:
+    """The runs that observed an add-on instance in a state of its recovery ``chart`` (in
+    a composite: in a state inside it)."""
+    return lambda sid: sorted({r for c in chart.state(sid).children or (sid,) for r in tr.aoi_reaching(c)})
+
+
 def add_on_page(spec: ir.Spec, a: ir.AddOnInstruction, tr: Traceability) -> str:
     """``instructions/<ID>.md``: the page of an instruction (flowchart, ordered checks,
     codes) with what an add-on instruction has besides: parameters, its status tag, local
@@ -578,7 +584,7 @@ def add_on_page(spec: ir.Spec, a: ir.AddOnInstruction, tr: Traceability) -> str:
             f"its own `.ERR` in `{exerr}`.", "", *documented_codes_table((err,), add_on_codes(spec, a, tr, p), p), ""]
     out += chart_sections(
         spec, chart, tr, p, heading="## Recovery chart", level="###", drawn=recovery_chart(spec, a, ordered=True),
-        reaching=lambda sid: sorted({r for c in chart.state(sid).children or (sid,) for r in tr.aoi_reaching(c)}),
+        reaching=recovery_reaching(chart, tr),
         states_note="*Scenarios reaching it*: the scenarios in which an instance was in the state at the end of a "
                     "scan; a state left in the scan it is entered (`checking`, a call that completes at once) is "
                     "passed through unobserved.")
@@ -752,9 +758,9 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
            "exercise it. Scenarios are *run* on the engine to fill this page: a scenario counts for a state "
            "when some scan observes the axis in it (or in a state inside it), and for an error code when "
            "some scan observes the instruction's tag with `ER` set and that `ERR` / `EXERR`. Their "
-           "`covers:` lists are shown at the end, beside what the runs observed. For an add-on instruction "
-           "scenario they are read from its instances (`AOI.<state>` of the recovery chart, `AOI <Sts_ERR>` "
-           "with `Sts_ER` set); the add-on instruction's own page lists them by code and state.", ""]
+           "`covers:` lists are shown at the end, beside what the runs observed. An add-on instruction is "
+           "listed with the others: its recovery chart's states and its own codes, read from its instances "
+           "in the scenarios (`AOI.<state>` of the recovery chart, `AOI <Sts_ERR>` with `Sts_ER` set).", ""]
     if tr.root is None:
         out += ["_No scenario directory was found, so no scenario is listed._", ""]
     else:
@@ -772,6 +778,16 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
                 f"[{c.id}](charts/{c.id}.md)", f"[{cell(state_title(s))}](charts/{c.id}.md#{anchor('state-' + s.id)})",
                 f"`{c.id}.states.{s.id}` (`{where(spec, s.location)}`)", scenario_links(runs, "", base=tr.link_base),
             ])
+    for a in spec.add_ons:
+        page, chart = f"instructions/{a.id}.md", recovery_chart(spec, a)
+        reaching = recovery_reaching(chart, tr)
+        for rs in a.recovery.states:
+            runs = reaching(rs.id)
+            gaps_states += not runs
+            rows.append([
+                f"[{chart.id}]({page}#recovery-chart)", f"[{cell(rs.id)}]({page}#{anchor('state-' + rs.id)})",
+                f"`{a.id}.recovery.states.{rs.id}` (`{where(spec, rs.location)}`)",
+                scenario_links(runs, "", base=tr.link_base)])
     out += table(["Chart", "State", "Spec element", "Scenarios reaching it"], rows)
     out += ["", "## Error codes", ""]
     rows = []
@@ -790,16 +806,40 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
                             f"(`{where(spec, c.location)}`)" for c in checks),
                 scenario_links(runs, "", base=tr.link_base),
             ])
+    for a in spec.add_ons:
+        page = f"instructions/{a.id}.md"
+        for e in sorted(a.errors, key=lambda e: e.code):
+            runs = tr.aoi_producing(e.code)
+            gaps_codes += not runs
+            rows.append([
+                f"[{a.id}]({page})", f"[{e.code}]({page}#{anchor(f'code-{e.code}')})", cell(e.name), "<br>".join(
+                    [f"[`{a.id}.{c.id}`]({page}#{anchor('check-' + c.id)}) (`{where(spec, c.location)}`)"
+                     for c in a.checks if c.err == e.code]
+                    + [f"[`{a.id}.recovery.states.{rs.id}`]({page}#{anchor('state-' + rs.id)}) when its "
+                       f"{rs.call.instruction} call errs (`{where(spec, rs.location)}`)"
+                       for rs in a.recovery.states if rs.call is not None and rs.error == e.code]),
+                scenario_links(runs, "", base=tr.link_base)])
     out += table(["Instruction", "ERR / EXERR", "Name", "Spec elements (checks)", "Scenarios producing it"], rows)
     out += ["", "## Completion (DN)", ""]
     out += table(["Instruction", "Spec element", "Scenarios completing it"], [
         [f"[{i.id}](instructions/{i.id}.md)", f"`{i.id}.done` (`{where(spec, i.location)}`)",
          scenario_links(tr.completing(i.id), "", base=tr.link_base)]
         for i in spec.instructions
+    ] + [
+        [f"[{a.id}](instructions/{a.id}.md)", f"`{a.id}.recovery.states.done`, {error_tags(a)[0][:-2]}PC "
+         f"(`{where(spec, a.recovery.state('done').location)}`)",
+         scenario_links(tr.aoi_completing(), "", base=tr.link_base)]
+        for a in spec.add_ons
     ])
     out += ["", "## Gaps", ""]
-    out += [f"- States no scenario reaches: {gaps_states}",
-            f"- Error codes no scenario produces: {gaps_codes}", ""]
+    out += [f"- States no scenario reaches: {gaps_states}"]
+    unseen = [f"`{rs.id}`" for a in spec.add_ons for rs in a.recovery.states
+              if not recovery_reaching(recovery_chart(spec, a), tr)(rs.id)]
+    if unseen:
+        out += [f"  - of them, recovery states of an add-on instruction: {len(unseen)} ({', '.join(unseen)}); "
+                "an instance is observed at the end of a scan, so a state it leaves in the scan it enters it "
+                "(`checking`, a call that completes at once) is not seen"]
+    out += [f"- Error codes no scenario produces: {gaps_codes}", ""]
     if tr.runs:
         out += ["## Scenarios", ""]
         out += table(["Scenario", "Result", "Scans", "Declares it covers", "Sources", "States observed",

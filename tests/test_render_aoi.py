@@ -316,6 +316,8 @@ def test_build_writes_the_aoi_artefacts(tmp_path: Path, spec: ir.Spec, aoi: ir.A
     interps = files["interpretations.md"].decode()
     assert f"](instructions/{AOI_ID}.md#check-energized)" in interps  # INT-022's user
     assert f"](instructions/{AOI_ID}.md#the-world-it-runs-in)" in interps  # INT-068's users
+    codes = section(files["error-codes.md"].decode(), "Codes of add-on instructions")  # 003 §2.4: all 21
+    assert re.findall(rf"\[(\d+)\]\(instructions/{AOI_ID}\.md#code-\1\)", codes) == [str(c) for c in ALL_CODES]
     assert not any(name.startswith("aoi/") for name in files)
 
 

@@ -22,7 +22,7 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.render import views
-from statecharts.render.addon import call_text, recovery_chart, transition_id
+from statecharts.render.addon import RECOVERY_SUFFIX, call_text, recovery_chart, transition_id
 from statecharts.render.flowchart import Routine, flowchart_part_names
 from statecharts.render.labels import error_tags, spec_path, state_title, where
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
@@ -723,7 +723,8 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
             used.setdefault(ch.err, []).append((ins, ch))
     out = [GENERATED_NOTE, "", "# Error codes", "",
            "The generic `ERR` codes of motion instructions, and the extended codes (`EXERR`) specific "
-           "to an instruction. *Used by* lists the checks that report a code.", "",
+           "to an instruction. *Used by* lists the checks that report a code."
+           + (" The codes of add-on instructions are indexed at the end." if spec.add_ons else ""), "",
            "## Generic error codes (ERR)", ""]
     rows = []
     for e in spec.errors:
@@ -749,6 +750,14 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
         ])
     out += table(["Instruction", "ERR", "EXERR", "Name", "Meaning", "Confidence", "Source", "Interpretation",
                   "Used by"], rows)
+    if spec.add_ons:
+        out += ["", "## Codes of add-on instructions", "",
+                "An add-on instruction reports codes of its own in its status tag; each is described, with what "
+                "reports it and the scenarios producing it, on the instruction's page.", ""]
+        out += table(["Add-on instruction", "Status tag member", "Codes"], [
+            [f"[{a.id}](instructions/{a.id}.md)", f"`{error_tags(a)[1]}`", ", ".join(
+                f"[{e.code}](instructions/{a.id}.md#{anchor(f'code-{e.code}')})"
+                for e in sorted(a.errors, key=lambda e: e.code))] for a in spec.add_ons])
     return "\n".join(out) + "\n"
 
 
@@ -870,7 +879,8 @@ def index_page(spec: ir.Spec, *, scxml: bool) -> str:
         for c in spec.charts
     ])
     out += ["", "## Instructions", ""]
-    recovery = {a.id: f" (add-on instruction; [recovery chart](diagrams/{a.id}_recovery.svg))" for a in spec.add_ons}
+    recovery = {a.id: f" (add-on instruction; [recovery chart](diagrams/{a.id}{RECOVERY_SUFFIX}.svg))"
+                for a in spec.add_ons}
     listed: list[ir.Instruction | ir.AddOnInstruction] = [*spec.instructions, *spec.add_ons]
     out += table(["Instruction", "Name", "Checks", "Flowchart", "Spec file"], [
         [f"[{i.id}](instructions/{i.id}.md)", cell(i.name) + recovery.get(i.id, ""), str(len(i.checks)),

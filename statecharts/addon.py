@@ -64,8 +64,9 @@ class AddOnInstance:
         sites: dict[tuple[str, str, str | None], str] = {}
         calls = [(s.id, s.call.instruction, s.call.axis, s.call.master) for s in add_on.recovery.states if s.call]
         abort = add_on.rung_false.abort_call
-        if abort:
-            calls += [("", abort, alias, None) for alias in dict.fromkeys(c[2] for c in calls)]
+        if abort:  # one abort call per axis that a call with a process (a motion) acts on
+            moving = [c[2] for c in calls if system.variant(c[1], self.axis_name(c[2])).process is not None]
+            calls += [("", abort, alias, None) for alias in dict.fromkeys(moving)]
         for sid, mnemonic, alias, master in calls:
             key = (mnemonic, alias, master)
             if key not in sites:
@@ -315,12 +316,14 @@ def check_operands(add_on: ir.AddOnInstruction, given: Mapping[str, object], cha
             problem = f"expected true or false, got {value!r}"
         elif par.type == "DINT" and (isinstance(value, bool) or not isinstance(value, int) or not -2**31 <= value < 2**31):
             problem = f"expected a DINT (whole number in 32 bits), got {value!r}"
+        elif par.values is not None and value not in par.values:
+            problem = f"expected one of {', '.join(map(str, par.values))} ({par.description or par.provenance.source}), got {value!r}"
         elif par.type == "REAL" and (isinstance(value, bool) or not isinstance(value, (int, float))):
             problem = f"expected a number (.nan and .inf are allowed), got {value!r}"
         elif par.type in ("axis", "handle"):
             fits = sorted(n for n, c in charts.items() if par.data_type in c.axis_types)
             if value not in fits:
-                problem = f"expected the name of a {par.data_type} of the set-up ({', '.join(fits) or 'none'}), got {value!r}"
+                problem = f"expected the name of an axis or device of type {par.data_type} ({', '.join(fits) or 'none'}), got {value!r}"
         if problem:
             err((*parts, name), f"{name}: {problem}")
         else:

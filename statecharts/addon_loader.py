@@ -59,7 +59,8 @@ def build_add_on(b: Any, f: Any, node: Any, charts: dict[str, ir.Chart]) -> ir.A
     b.duplicates(f, at("parameters"), params, "name", "parameter")
     parameters = tuple(ir.AddOnParameter(
         p["name"], p["usage"], p["type"], p.get("data_type"), p.get("alias"), p.get("default"),
-        str(p.get("description", "")), b.prov(f, at("parameters", i), p), b.loc(f, at("parameters", i)))
+        str(p.get("description", "")), b.prov(f, at("parameters", i), p), b.loc(f, at("parameters", i)),
+        tuple(p["values"]) if "values" in p else None)
         for i, p in enumerate(params))
     status_nodes = node.items("status", "status_member")
     b.duplicates(f, at("status"), status_nodes, "name", "status member")

@@ -69,7 +69,11 @@ def same(expected: object, actual: object) -> bool:
     """Plain comparison: booleans exactly, numbers to a relative 1e-9, else equality."""
     if isinstance(expected, bool) or isinstance(actual, bool):
         return isinstance(expected, bool) and isinstance(actual, bool) and expected == actual
+    if isinstance(expected, int) and isinstance(actual, int):
+        return expected == actual  # exactly: an integer beyond any float is no error
     if isinstance(expected, (int, float)) and isinstance(actual, (int, float)):
+        if abs(expected) > 1e300 or abs(actual) > 1e300:  # beyond any REAL: no float() of a huge int
+            return expected == actual
         return abs(float(expected) - float(actual)) <= 1e-9 * max(1.0, abs(float(expected)))
     return expected == actual
 

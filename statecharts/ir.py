@@ -450,6 +450,8 @@ class AddOnParameter:
     description: str
     provenance: Provenance
     location: Location
+    #: the only values a program may give a DINT parameter (None: any DINT)
+    values: tuple[int, ...] | None = None
 
 
 @dataclass(frozen=True, slots=True)

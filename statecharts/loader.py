@@ -128,7 +128,7 @@ ADD_ON_INSTRUCTION_KEYS = frozenset(
      "on_done", "rung_false", "prescan", "world"}
 ) | _PROVENANCE
 EXECUTION_KEYS = frozenset({"mode"}) | _PROVENANCE
-ADDON_PARAMETER_KEYS = frozenset({"name", "usage", "type", "data_type", "alias", "default", "description"}) | _PROVENANCE
+ADDON_PARAMETER_KEYS = frozenset({"name", "usage", "type", "data_type", "alias", "default", "description", "values"}) | _PROVENANCE
 STATUS_MEMBER_KEYS = frozenset({"name", "type", "description"}) | _PROVENANCE
 ADDON_ERROR_KEYS = frozenset({"code", "name", "description"}) | _PROVENANCE
 RECOVERY_KEYS = frozenset({"initial", "states", "transitions", "description"}) | _PROVENANCE

@@ -41,6 +41,7 @@ rules.  With :attr:`System.trace` set to a list, a scan appends explicit
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -95,6 +96,12 @@ class ProcessEnded:
 
     tag: str
     complete: bool
+
+
+@functools.cache
+def _has_tick(chart: ir.Chart) -> bool:
+    """Whether the chart has a clock event (a device handler has none: nothing to send)."""
+    return any(e.name == "tick" for e in chart.events)
 
 
 def _is_drive_event(axis: AxisInstance, event: str) -> bool:
@@ -404,7 +411,8 @@ class System:
         events, self.held_events = self.held_events, []
         due = self._drive_events(events)
         for axis in self.axes.values():
-            axis.send("tick")
+            if _has_tick(axis.chart):
+                axis.send("tick")
             # the drive model's outcomes of the time that passed (docs/semantics.md)
             for name in due.get(axis.name, ()):
                 self._environment(axis, name)

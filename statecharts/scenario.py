@@ -295,7 +295,7 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
                     err((*p, key), f"{ao.id} takes its axes as operands (its InOut parameters), not `{key}:`")
             ops = addon.check_operands(ao, entry.get("operands", {}), charts, (*p, "operands"), err)
             for par in ao.parameters:
-                if par.usage == "InOut" and par.name not in ops:
+                if par.usage == "InOut" and par.name not in entry.get("operands", {}):
                     err((*p, "operands"), f"{ao.id} needs its InOut parameter {par.name}")
             preset = addon.check_preset(ao, entry.get("preset", {}), (*p, "preset"), err)
             program.append(ProgramEntry(entry["tag"], ao.id, "", tuple(sorted(ops.items())), tuple(preset.items())))

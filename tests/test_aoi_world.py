@@ -29,6 +29,9 @@ from statecharts.engine import AxisInstance
 from statecharts.loader import load_spec, read_yaml
 
 PROJECT = Path(__file__).resolve().parents[1]
+#: scenarios in the world's own format (motionchart-aoi-scenario/1), which the model checker's
+#: counterexamples are written in
+OLD_FORMAT = Path(__file__).resolve().parent / "aoi_world_scenarios"
 SPEC = aoi.load_aoi()
 MAIN = aoi.bundled_aoi().main
 
@@ -172,8 +175,8 @@ def test_snapshot_holds_every_part_of_the_state() -> None:
 
 def test_set_is_what_a_scenario_set_does(tmp_path: Path) -> None:
     """run_aoi_scenario applies `set:` through World.set: a fault set in a step is the chart's."""
-    text = (PROJECT / "scenarios" / "aoi" / "fault_during_recovery.yaml").read_text(encoding="utf-8")
-    s = aoi.load_aoi_scenario("x.yaml", read_yaml(PROJECT / "scenarios" / "aoi" / "fault_during_recovery.yaml", []), SPEC)
+    text = (OLD_FORMAT / "fault_during_recovery.yaml").read_text(encoding="utf-8")
+    s = aoi.load_aoi_scenario("x.yaml", read_yaml(OLD_FORMAT / "fault_during_recovery.yaml", []), SPEC)
     assert "set: {Axis_Phy: {faulted: true}}" in text
     w = world()
     for _ in range(5):
@@ -369,7 +372,7 @@ def test_sts_pc_is_one_scan_after_the_target_is_reached() -> None:
 
 # --------------------------------------------------------------------------- bad input
 
-BASE = (PROJECT / "scenarios" / "aoi" / "app_example_s4.yaml").read_text(encoding="utf-8")
+BASE = (OLD_FORMAT / "app_example_s4.yaml").read_text(encoding="utf-8")
 PHY = "Axis_Phy: {type: AXIS_CIP_DRIVE, position: 100.0, unwind: 360.0, homed: true, energized: true}"
 PTH = "Axis_PTH: {type: AXIS_VIRTUAL, position: 120.0, unwind: 360.0}"
 

@@ -334,6 +334,7 @@ def test_simulate_runs_the_motion_instructions_of_the_spec_copy(capsys: pytest.C
     scenario = ROOT / "scenarios" / "aoi" / "err_1022_mam_zero_speed.yaml"
     rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
     assert rc == 0, (out, err)
-    edit(spec_copy / "instructions" / "motion" / "MAM.yaml", "Speed <= 0\", err: 13,", "Speed <= 0\", err: 14,")
+    # the copy's MAM (the main instruction chart the recovery calls) takes a zero speed
+    edit(spec_copy / "instructions" / "cip" / "MAM.yaml", "not (op.Speed > 0.0 and", "not (op.Speed >= 0.0 and")
     rc, out, err = run(capsys, "simulate", "-q", str(scenario), "--spec", str(spec_copy))
-    assert rc == 1 and "Sts_EXERR expected 13, got 14" in out + err, (out, err)
+    assert rc == 1 and "Sync.Sts_ER expected true, got false" in out + err, (out, err)

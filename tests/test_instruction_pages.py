@@ -44,6 +44,8 @@ def section_table(page: str, heading: str) -> list[dict[str, str]]:
     """The rows of the first Markdown table under ``## heading``, as header -> cell text."""
     lines = page.splitlines()
     start = lines.index(f"## {heading}")
+    if "_None._" in lines[start + 1:start + 5]:
+        return []  # the page says the section is empty
     rows: list[list[str]] = []
     for line in lines[start + 1:]:
         if line.startswith("## "):

@@ -251,7 +251,10 @@ add_on_instruction = obj(
             "name": ID, "usage": {"enum": ["Input", "Output", "InOut"]},
             "type": {"enum": ["axis", "handle", "BOOL", "DINT", "REAL"]}, "data_type": ID,
             "alias": {**ID, "description": "Short name the expressions use for an axis or handle parameter (phy, pth, handler)."},
-            "default": SCALAR, "description": {"type": "string"}, **PROV})},
+            "default": SCALAR, "description": {"type": "string"},
+            "values": {"type": "array", "minItems": 1, "items": {"type": "integer"},
+                       "description": "The only values a program may give a DINT parameter (a scenario giving another is refused)."},
+            **PROV})},
         "status": {"type": "array", "minItems": 1, "items": obj(["name", "type", "source"], {
             "name": ID, "type": {"enum": ["BOOL", "DINT"]}, "description": {"type": "string"}, **PROV})},
         "local_tags": {"type": "array", "items": variable},

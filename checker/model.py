@@ -328,8 +328,10 @@ class Model:
         self.param_names: list[tuple[str, ...]] = [
             tuple(sorted({k for c in g.configurations for k, _v in c.parameters})) for _a, g in self.axis_defs]
         # a property tied to a chart the system has no axis of does not apply to it
+        ao_ids = {a.add_on.id for a in getattr(self.system, "add_ons", {}).values()}
         self.properties = tuple(p for p in self.properties if (p.chart is None or p.chart in self.charts)
-                                and (not p.systems or sysdef.name in p.systems))
+                                and (not p.systems or sysdef.name in p.systems)
+                                and (p.scope != "add_on" or (p.instruction or "") in ao_ids | ({""} if ao_ids else set())))
         self.notes: list[str] = []
 
         # cone of influence and the collapse abstraction
@@ -637,9 +639,9 @@ class Model:
             else:
                 config, values, q, e = part
                 axis.restore((config, values))
-            names = self.param_names[ai]
-            if names:
-                axis.env.update(zip(names, values[len(values) - len(names):]))
+            pnames = self.param_names[ai]
+            if pnames:
+                axis.env.update(zip(pnames, values[len(values) - len(pnames):]))
             if q:
                 names = self.tags_of_axis[ai]
                 queue.extend([self.tags[names[k]].name for k in q])

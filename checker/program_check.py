@@ -32,12 +32,13 @@ import argparse
 import itertools
 import json
 import os
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-from checker.program_model import AxisSetup, ProgramModel, ProgramModelError, Start, State
+from checker.program_model import AxisSetup, InputRule, ProgramModel, ProgramModelError, Start, State, compiled_leaf
 from checker.program_search import (
     KINDS,
     Graph,
@@ -53,13 +54,15 @@ from statecharts import ir as spec_ir
 from statecharts.diagnostics import Diagnostic, InputError, locate
 from statecharts.program.environment import CIP_STARTS
 from statecharts.program.ir import AXIS_UNTYPED, Program
+from statecharts.scenario import value_problem
 
 FORMAT = "motionchart-program-system/1"
 EXIT_OK, EXIT_VIOLATED, EXIT_USAGE, EXIT_INCOMPLETE = 0, 1, 2, 3
 _TOP_KEYS = ("format", "name", "description", "program", "axes", "tags", "inputs", "max_events", "max_scans",
-             "scan_ms", "domains", "properties", "sources")
-_AXIS_KEYS = ("type", "starts", "events")
-_PROP_KEYS = ("name", "kind", "expr", "goal", "within", "final", "description")
+             "scan_ms", "domains", "properties", "sources", "prescan", "unreached")
+_AXIS_KEYS = ("type", "starts", "events", "set")
+_INPUT_KEYS = ("values", "while", "counted")
+_PROP_KEYS = ("name", "kind", "expr", "goal", "within", "final", "description", "source", "interpretation")
 
 
 @dataclass
@@ -68,6 +71,8 @@ class AxisEntry:
     type: str
     starts: list[tuple[str, AxisSetup]]
     events: list[str] = field(default_factory=list)
+    #: writable chart variables the environment may set, with their values
+    sets: dict[str, list[Any]] = field(default_factory=dict)
 
 
 @dataclass
@@ -86,6 +91,12 @@ class ProgramSystem:
     properties: list[ProgramProperty] = field(default_factory=list)
     #: declared integer domains: tag path -> (least, greatest)
     domains: dict[str, tuple[int, int]] = field(default_factory=dict)
+    #: inputs that change only while a condition holds, or whose changes are counted
+    input_rules: dict[str, InputRule] = field(default_factory=dict)
+    #: a run may pass a prescan at any scan (Program mode and back to Run)
+    prescan: bool = False
+    #: coverage items left unreached on purpose ("X_MSO 13", "X_axis Faulted") -> why
+    unreached: dict[str, str] = field(default_factory=dict)
 
     def starts(self) -> list[Start]:
         out = []
@@ -98,7 +109,9 @@ class ProgramSystem:
         return ProgramModel(spec, self.program, axis_types={a.name: a.type for a in self.axes},
                             inputs=self.inputs, int_inputs=self.int_inputs,
                             events={a.name: a.events for a in self.axes if a.events}, max_events=self.max_events,
-                            scan_ms=self.scan_ms, coverage=coverage)
+                            scan_ms=self.scan_ms, coverage=coverage,
+                            sets={a.name: a.sets for a in self.axes if a.sets}, input_rules=self.input_rules,
+                            prescan=self.prescan)
 
 
 def bundled_program_systems() -> dict[str, Path]:
@@ -214,7 +227,26 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
         if not isinstance(events, list) or not all(isinstance(e, str) for e in events):
             err(("axes", tag.name, "events"), "events: a list of environment event names")
             events = []
-        axes.append(AxisEntry(tag.name, axis_type, starts, list(events)))
+        sets: dict[str, list[Any]] = {}
+        sdoc = a.get("set") or {}
+        if not isinstance(sdoc, Mapping):
+            err(("axes", tag.name, "set"), "set: a mapping from writable chart variables to lists of values")
+            sdoc = {}
+        writable = {v.name: v for v in chart.variables if v.writable}
+        for var, vals in sdoc.items():
+            if var not in writable:
+                err(("axes", tag.name, "set", var), f"{var!r} is not a writable variable of {chart.id}; writable: "
+                                                    f"{', '.join(writable) or '(none)'}", key=True)
+                continue
+            if not isinstance(vals, list) or not vals:
+                err(("axes", tag.name, "set", var), f"{var}: a non-empty list of values")
+                continue
+            for n, value in enumerate(vals):
+                problem = value_problem(writable[var].type, writable[var].domain, value)
+                if problem:
+                    err(("axes", tag.name, "set", var, n), f"{var}: {problem}")
+            sets[str(var)] = list(vals)
+        axes.append(AxisEntry(tag.name, axis_type, starts, list(events), sets))
     for k in axes_doc:
         if k not in {t.name for t in program.axes()}:
             err(("axes", k), f"{k} is not an axis of the program; its axes: "
@@ -225,18 +257,33 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
         tags_doc = {}
     inputs: list[str] = []
     int_inputs: dict[str, list[int]] = {}
+    input_rules: dict[str, InputRule] = {}
     if "inputs" in doc:
         idoc = doc.get("inputs") or {}
         if not isinstance(idoc, Mapping):
             err(("inputs",), "inputs: a mapping from tag names to BOOL or a list of integer values")
             idoc = {}
         for k, v in idoc.items():
+            if isinstance(v, Mapping):
+                for key in v:
+                    if key not in _INPUT_KEYS:
+                        err(("inputs", k, key), f"unknown key {key!r}; expected one of: {', '.join(_INPUT_KEYS)}",
+                            key=True)
+                guard, counted = v.get("while", ""), v.get("counted", False)
+                if not isinstance(guard, str):
+                    err(("inputs", k, "while"), "while: an expression over the state before the scan")
+                    guard = ""
+                if not isinstance(counted, bool):
+                    err(("inputs", k, "counted"), "counted: true or false")
+                    counted = False
+                input_rules[str(k)] = InputRule(guard, counted)
+                v = v.get("values", "BOOL")
             if v == "BOOL":
                 inputs.append(str(k))
             elif isinstance(v, list) and v and all(isinstance(x, int) and not isinstance(x, bool) for x in v):
                 int_inputs[str(k)] = list(v)
             else:
-                err(("inputs", k), "an input is BOOL or a non-empty list of integer values")
+                err(("inputs", k), "an input is BOOL, a non-empty list of integer values, or {values:, while:, counted:}")
     else:
         inputs = list(free_inputs(program))
 
@@ -276,8 +323,19 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
         if kind == "leads_to" and not isinstance(pd.get("goal"), str):
             err(("properties", n, "goal"), "a leads_to property needs goal:")
             continue
+        interp = pd.get("interpretation")
+        if interp is not None and not (isinstance(interp, str) and re.fullmatch(r"INT-[0-9]{3}", interp)):
+            err(("properties", n, "interpretation"), "interpretation: an interpretation id such as INT-021")
+            interp = None
+        if interp is not None:
+            try:
+                spec.interpretation(interp)
+            except KeyError:
+                err(("properties", n, "interpretation"), f"{interp} is not an interpretation of the spec")
         props.append(ProgramProperty(str(pd.get("name") or f"{kind} {n}"), kind, str(pd.get("expr") or ""),
-                                     str(pd.get("goal") or ""), within, str(pd.get("final") or ""), name, line))
+                                     str(pd.get("goal") or ""), within, str(pd.get("final") or ""), name, line,
+                                     str(pd.get("source") or ""), str(interp or ""),
+                                     str(pd.get("description") or "")))
     domains: dict[str, tuple[int, int]] = {}
     ddoc = doc.get("domains") or {}
     if not isinstance(ddoc, Mapping):
@@ -289,13 +347,58 @@ def load_program_system(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
             domains[str(k)] = (v[0], v[1])
         else:
             err(("domains", k), "a domain is [least, greatest], two integers")
+    prescan = doc.get("prescan", False)
+    if not isinstance(prescan, bool):
+        err(("prescan",), "prescan: true (a run may pass a prescan at any scan) or false")
+        prescan = False
+    unreached: dict[str, str] = {}
+    udoc = doc.get("unreached") or {}
+    if not isinstance(udoc, Mapping) or not all(isinstance(v, str) and v for v in udoc.values()):
+        err(("unreached",), "unreached: a mapping from coverage items ('X_MSO 13', 'X_axis Faulted') to the reason")
+        udoc = {}
+    for k, v in udoc.items():
+        unreached[str(k)] = str(v)
     system = ProgramSystem(str(doc.get("name") or path.stem), name, program, pfile, axes,
                            [(str(k), v) for k, v in tags_doc.items()], inputs, int_inputs,
                            count("max_events", 0) or 0, count("max_scans", None), count("scan_ms", 10) or 10, props,
-                           domains)
+                           domains, input_rules, prescan, unreached)
+    for k in input_rules:
+        if k not in (*inputs, *int_inputs):
+            err(("inputs", k), f"{k}: not a free input")
+    items = {x for table in coverage_items(system, spec).values() for x in table}
+    for k in unreached:
+        if k not in items:
+            err(("unreached", k), f"{k!r} is not a coverage item of this system (an instruction tag and one of its "
+                                  f"error codes, 'X_MSO 13', or an axis and one of its states, 'X_axis Faulted')",
+                key=True)
     if errors:
         raise InputError(errors)
     return system
+
+
+def documented_codes(spec: spec_ir.Spec, mnemonic: str, chart: str) -> tuple[int, ...]:
+    """The error codes the variant of ``mnemonic`` for ``chart`` can end with: its checks' and
+    aborts' ERR values (an instruction without a variant for the chart only errs with the tag
+    type's wrong-axis-family code, as :meth:`statecharts.scan.System.variant` runs it)."""
+    try:
+        ins = spec.instruction(mnemonic, chart)
+    except KeyError:
+        wrong = spec.tag_type.wrong_axis_family
+        return (wrong.err,) if wrong is not None else ()
+    return tuple(sorted({c.err for c in (*ins.checks, *ins.aborts)}))
+
+
+def coverage_items(system: ProgramSystem, spec: spec_ir.Spec) -> dict[str, tuple[str, ...]]:
+    """What coverage counts, by table: ``error_codes`` (``TAG CODE`` for every documented error code
+    of every motion instruction of the program) and ``states`` (``AXIS STATE`` for every leaf state
+    of every axis chart)."""
+    from statecharts.program.ladder import motion_bindings
+    charts = {a.name: spec.chart_for_axis_type(a.type) for a in system.axes}
+    codes = [f"{b.tag} {c}" for b in motion_bindings(system.program, []) if b.axis in charts
+             for c in documented_codes(spec, b.mnemonic, charts[b.axis].id)]
+    states = [f"{a} {st.id}" for a, chart in charts.items() for st in chart.states if not st.children
+              and st.kind in (spec_ir.StateKind.ATOMIC, spec_ir.StateKind.FINAL)]
+    return {"error_codes": tuple(codes), "states": tuple(states)}
 
 
 def system_for_program(path: Path, spec: spec_ir.Spec) -> ProgramSystem:
@@ -331,7 +434,12 @@ def replay(model: ProgramModel, graph: Graph, path: Sequence[int]) -> list[tuple
     for u in path[1:]:
         ch = model.choice(graph.via[u])
         events = (ch.event,) if ch.event else ()
-        c.scan(events=events, **dict(ch.writes))
+        if ch.prescan:
+            c.prescan()
+        else:
+            if ch.set is not None:
+                c.system.axes[ch.set[0]].env[ch.set[1]] = ch.set[2]
+            c.scan(events=events, **dict(ch.writes))
         now = _observe(c)
         notes = []
         for b in model.bindings:
@@ -342,6 +450,10 @@ def replay(model: ProgramModel, graph: Graph, path: Sequence[int]) -> list[tuple
                 notes.append(f"rung {b.rung}: {b.mnemonic}({b.axis},{b.tag}) done")
         if ch.event:
             notes.append(f"event {ch.event[1]} on {ch.event[0]}")
+        if ch.set is not None:
+            notes.append(f"{ch.set[0]}.{ch.set[1]} set to {ch.set[2]!r} before the scan")
+        if ch.prescan:
+            notes.append("a prescan pass (Program mode and back to Run)")
         mine = model.encode(c.system)[1:]
         want = graph.states[u][1:]
         if mine != want:
@@ -437,6 +549,11 @@ def scenario_document(model: ProgramModel, system: ProgramSystem, graph: Graph, 
             step["tags"] = writes
         if ch.event:
             step["events"] = [{"axis": ch.event[0], "event": ch.event[1]}]
+        if ch.set is not None:
+            step["set"] = {ch.set[0]: {ch.set[1]: ch.set[2]}}
+        if ch.prescan:
+            step["name"] = f"prescan {n}" + (" (in the cycle)" if n >= len(path) else "")
+            step["prescan"] = True
         steps.append(step)
     last = path[-1]
     if steps and len(path) > 1:
@@ -455,8 +572,9 @@ def scenario_document(model: ProgramModel, system: ProgramSystem, graph: Graph, 
 
 
 def _choice_between(model: ProgramModel, graph: Graph, u: int, v: int) -> Any:
+    from checker.program_search import successor_function
     s = graph.states[u]
-    for ch, t in model.successors(s)[0]:
+    for ch, t in successor_function(model)(s)[0]:
         if graph.index.get(t) == v:
             return model.choice(ch)
     raise AssertionError("no choice leads from u to v")
@@ -527,7 +645,30 @@ class ProgramReport:
                               for t, mn, r, e, x, c in errors],
             "motion_never_done": [b.tag for k, b in enumerate(m.bindings) if k not in cov.done],
             "domains": self.domains(),
+            **self.tables(),
         }
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Coverage by table: the documented error codes of every motion instruction (reached when some
+        explored scan ended the instruction with that ERR) and the leaf states of every axis (reached
+        when some explored state has the axis there); each unreached item with the system's reason, if
+        it gives one (``unreached:``)."""
+        m, g = self.model, self.graph
+        items = coverage_items(self.system, m.spec)
+        reached_codes = {f"{m.bindings[k].tag} {err}" for k, err, _x, _c in m.cov.errors}
+        reached_states: set[str] = set()
+        for i, a in enumerate(m.axis_names):
+            leaf = compiled_leaf(m.charts[i])
+            pos = m.core_pos[i]
+            for c in {s[pos] for s in g.states}:
+                reached_states.add(f"{a} {leaf(m.cores[i].values[c][0])}")
+        out: dict[str, dict[str, Any]] = {}
+        for key, reached in (("error_codes", reached_codes), ("states", reached_states)):
+            got = [x for x in items[key] if x in reached]
+            missed = [x for x in items[key] if x not in reached]
+            out[key] = {"reached": got, "unreached": missed,
+                          "explained": {x: self.system.unreached[x] for x in missed if x in self.system.unreached}}
+        return out
 
     def domains(self) -> list[str]:
         from checker.program_model import static_domains
@@ -610,6 +751,21 @@ class ProgramReport:
             "; ".join(f"{e['instruction']} {e['tag']} (rung {e['rung']}) ERR {e['ERR']}/EXERR {e['EXERR']} "
                       f"({e['check']})" for e in errs) or "none"))
         lines.append(f"  motion instructions never done: {', '.join(cov['motion_never_done']) or 'none'}")
+        mnemonic = {b.tag: b.mnemonic for b in m.bindings}
+        for key, what in (("error_codes", "error codes"), ("states", "states")):
+            t = cov[key]
+            owners: dict[str, tuple[list[str], list[str]]] = {}
+            for x in t["reached"]:
+                owners.setdefault(x.rsplit(" ", 1)[0], ([], []))[0].append(x.rsplit(" ", 1)[1])
+            for x in t["unreached"]:
+                owner, item = x.rsplit(" ", 1)
+                owners.setdefault(owner, ([], []))[1].append(item + (" (explained)" if x in t["explained"] else ""))
+            for owner, (got, missed) in owners.items():
+                label = f"{owner} ({mnemonic[owner]})" if owner in mnemonic else owner
+                line = f"  {what} of {label}: {len(got)}/{len(got) + len(missed)} reached"
+                if missed:
+                    line += "; unreached: " + ", ".join(missed)
+                lines.append(line)
         lines.append("integer domains (computed from the program" + (", declared" if self.system.domains else "") + "):")
         for d in cov["domains"]:
             lines.append(f"  {d}")

@@ -65,7 +65,8 @@ from statecharts.program.ir import (
 )
 from statecharts.program.ladder import DINT_MAX, DINT_MIN, Ladder, MotionBinding, canonical
 from statecharts.program.tags import INTEGER_BITS, STRUCTURES, wrap
-from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, System, TagInstance
+from statecharts.scan import Done, EnvironmentEvent, Errored, Executed, ScanInputs, System, TagInstance
+from statecharts.scenario import value_problem
 
 MOTION_MEMBERS = tuple(m for m, _t in STRUCTURES["MOTION_INSTRUCTION"])
 
@@ -101,6 +102,20 @@ class Choice:
 
     writes: tuple[tuple[str, Scalar], ...]  # free input values
     event: tuple[str, str] | None  # (axis, event)
+    #: (axis, variable, value): a writable chart variable set before the scan
+    set: tuple[str, str, Any] | None = None
+    #: a prescan pass instead of a scan (the controller to Program mode and back to Run)
+    prescan: bool = False
+
+
+@dataclass(frozen=True, slots=True)
+class InputRule:
+    """How the environment may change one free input: only in states where ``while_`` holds
+    (an expression over the state before the scan; empty: always), and, when ``counted``,
+    each change spends one of the run's environment changes (``max_events``)."""
+
+    while_: str = ""
+    counted: bool = False
 
 
 @dataclass
@@ -133,7 +148,9 @@ class ProgramModel:
     def __init__(self, spec: spec_ir.Spec, program: Program, *, axis_types: Mapping[str, str],
                  inputs: Sequence[str] = (), int_inputs: Mapping[str, Sequence[int]] | None = None,
                  events: Mapping[str, Sequence[str]] | None = None, max_events: int = 0,
-                 scan_ms: int = 10, coarse_update_ms: int | None = None, coverage: bool = True) -> None:
+                 scan_ms: int = 10, coarse_update_ms: int | None = None, coverage: bool = True,
+                 sets: Mapping[str, Mapping[str, Sequence[Any]]] | None = None,
+                 input_rules: Mapping[str, InputRule] | None = None, prescan: bool = False) -> None:
         self.spec = spec
         self.program = program
         self.scan_ms = scan_ms
@@ -216,6 +233,38 @@ class ProgramModel:
                         f"{', '.join(known)}")))
                     continue
                 self.events.append((self.axis_index[axis], ev))
+        #: (axis index, variable, value): the chart-variable writes the environment may make
+        self.sets: list[tuple[int, str, Any]] = []
+        for axis, variables in (sets or {}).items():
+            if axis not in self.axis_index:
+                problems.append(_error(program, None, None, f"set for {axis}: not an axis of the program; axes: "
+                                                            f"{', '.join(self.axis_names)}"))
+                continue
+            chart = self.charts[self.axis_index[axis]]
+            writable = [v.name for v in chart.variables if v.writable]
+            for var, vals in variables.items():
+                if var not in writable:
+                    problems.append(_error(program, None, None, (
+                        f"{var!r} is not a writable variable of {chart.id} (axis {axis}); writable: "
+                        f"{', '.join(writable) or '(none)'}")))
+                    continue
+                v = chart.variable(var)
+                for value in vals:
+                    problem = value_problem(v.type, v.domain, value)
+                    if problem:
+                        problems.append(_error(program, None, None, f"set {axis}.{var} = {value!r}: {problem}"))
+                        continue
+                    self.sets.append((self.axis_index[axis], var, value))
+        self.input_rules = {k: r for k, r in (input_rules or {}).items() if r.while_ or r.counted}
+        for k in self.input_rules:
+            if k not in (*self.inputs, *self.int_inputs):
+                problems.append(_error(program, None, None, f"input rule for {k}: not a free input of the system"))
+        self.prescan_choice = prescan
+        #: sets, prescans or input rules: the choices are completed by :meth:`expand`
+        self.extended = bool(self.sets or self.input_rules or prescan)
+        self.SET: list[dict[tuple[int, str, Any], int]] = [{} for _ in self.axis_names]
+        self.PRESCAN: dict[State, State] = {}
+        self._cold: System | None = None
         if problems:
             raise ProgramModelError(problems)
         values = [(False, True)] * len(self.inputs) + [self.int_inputs[n] for n in self.int_inputs]
@@ -433,16 +482,83 @@ class ProgramModel:
         return self.encode(system)
 
     def choice(self, index: int) -> Choice:
-        """The environment's choice number ``index`` (as the successor function numbers them)."""
+        """The environment's choice number ``index``: as the successor function numbers them
+        (input combination, event), then the sets (each with every input combination), then
+        the prescan."""
         ncombo = len(self.combos)
-        combo, ev = index % ncombo, index // ncombo - 1
         names = (*self.inputs, *self.int_inputs)
+        if index >= self.nchoices:
+            j = index - self.nchoices
+            if j >= len(self.sets) * ncombo:
+                return Choice((), None, prescan=True)
+            i, var, value = self.sets[j // ncombo]
+            return Choice(tuple(zip(names, self.combos[j % ncombo])), None, (self.axis_names[i], var, value))
+        combo, ev = index % ncombo, index // ncombo - 1
         writes = tuple(zip(names, self.combos[combo]))
         event = None
         if ev >= 0:
             i, name = self.events[ev]
             event = (self.axis_names[i], name)
         return Choice(writes, event)
+
+    # -- the choices the compiled scan does not make: sets and prescans (the cold path) ---------------
+
+    def expand(self, s: State) -> tuple[list[tuple[int, State]], int, int]:
+        """The successors of ``s`` with the sets and the prescan (input rules are the search's):
+        what :attr:`successors` gives, then per set of a chart variable (while fewer than
+        ``max_events`` changes have happened) the scans after it, then the prescan pass."""
+        outs, cv, ex = self.successors(s)
+        if not self.extended:
+            return outs, cv, ex
+        outs = list(outs)
+        ncombo = len(self.combos)
+        if s[0] < self.max_events:
+            for j, (i, var, value) in enumerate(self.sets):
+                pos = self.core_pos[i]
+                c = s[pos]
+                key = (c, var, value)
+                c2 = self.SET[i].get(key)
+                if c2 is None:
+                    fa = self._load_core(i, c)
+                    fa.env[var] = value
+                    c2 = self.SET[i][key] = self.core_id(i, fa.snapshot())
+                s2 = (s[0] + 1, *s[1:pos], c2, *s[pos + 1:])
+                more, cv2, ex2 = self.successors(s2)
+                cv |= cv2
+                ex |= ex2
+                base = self.nchoices + j * ncombo
+                outs.extend((base + ch, t) for ch, t in more if ch < ncombo)
+        if self.prescan_choice:
+            outs.append((self.nchoices + len(self.sets) * ncombo, self.prescanned(s)))
+        return outs, cv, ex
+
+    def _system_of(self, s: State) -> System:
+        """An engine system (checker axis back-end) in state ``s``."""
+        if self._cold is None:
+            params = {"scan_ms": self.scan_ms, "coarse_update_ms": self.scan_ms}
+            axes: list[Any] = [FastAxis(c, a, parameters=params) for c, a in zip(self.charts, self.axis_names)]
+            self._cold = System(self.spec, axes, [], scan_ms=self.scan_ms, coarse_update_ms=self.scan_ms,
+                                ladder=Ladder(self.program, scan_ms=self.scan_ms))
+        system = self._cold
+        for i, a in enumerate(self.axis_names):
+            system.axes[a].restore(self.cores[i].values[s[self.core_pos[i]]])
+        for k, b in enumerate(self.bindings):
+            system.tags[b.tag].restore(self.parts.values[s[self.part_pos[k]]])
+        assert system.ladder is not None
+        values = system.ladder.db.values
+        for slot in self.slots:
+            values[slot] = s[self.slot_pos[slot]]
+        system.queue, system.held_events, system.index = [], [], 0
+        return system
+
+    def prescanned(self, s: State) -> State:
+        """The state after a prescan pass from ``s`` (the scan module's own prescan, remembered)."""
+        hit = self.PRESCAN.get(s)
+        if hit is None:
+            system = self._system_of(s)
+            system.advance(ScanInputs(prescan=True))
+            hit = self.PRESCAN[s] = (s[0], *self.encode(system)[1:])
+        return hit
 
     # -- reading a state -------------------------------------------------------------------------
 

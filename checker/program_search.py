@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from checker.program_model import ProgramModel, Start, State
+from checker.program_model import ProgramModel, ProgramModelError, Start, State
 from statecharts.diagnostics import Diagnostic
 from statecharts.expr import Expr, ExprError, parse_expression
 
@@ -59,6 +59,9 @@ class ProgramProperty:
     final: str = ""  # deadlock: states where standing still is the intended end
     file: str = ""
     line: int = 1
+    source: str = ""  # the documents the property comes from
+    interpretation: str = ""  # INT-nnn when the property rests on an interpretation
+    description: str = ""
 
     def texts(self) -> list[str]:
         return [t for t in (self.expr, self.goal, self.final) if t]
@@ -201,14 +204,16 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
         via.append(-1)
         depth.append(0)
         start_of.append(n)
-    successors = model.successors
+    successors = successor_function(model)
     cov = model.cov
     combo_index = {c: i for i, c in enumerate(model.combos)}
     input_pos = [model.slot_pos[x] for x in model.input_slots]
     inputs_of = operator.itemgetter(*input_pos) if input_pos else (lambda _s: ())
     # the free inputs are written before each scan: the successors of a state do not depend on
     # the values its inputs had in the previous scan, so they are computed once per controller state
-    kept = [j for j in range(model.width) if j not in set(input_pos)]
+    # (unless an input rule reads them or a prescan keeps them: then once per state)
+    free = set(input_pos) if not (model.input_rules or model.prescan_choice) else set()
+    kept = [j for j in range(model.width) if j not in free]
     controller_of = operator.itemgetter(*kept)
     single = len(input_pos) == 1
     memo: dict[Any, tuple[tuple[int, ...], dict[int, int]]] = {}
@@ -281,6 +286,58 @@ def explore(model: ProgramModel, starts: Sequence[Start], *, max_states: int | N
     g.seconds = time.perf_counter() - t0
     g.cpu_seconds = time.process_time() - c0
     return g
+
+
+def successor_function(model: ProgramModel) -> Callable[[State], tuple[list[tuple[int, State]], int, int]]:
+    """The successors of a state as the search takes them: the compiled scan, completed by the
+    model's sets, prescan and input rules when it has any."""
+    return model.successors if not model.extended else _constrained(model)
+
+
+def _constrained(model: ProgramModel) -> Callable[[State], tuple[list[tuple[int, State]], int, int]]:
+    """The successor function with the model's sets and prescan (:meth:`ProgramModel.expand`) and its
+    input rules: an input with ``while`` changes only in a state where that holds; each change of a
+    counted input spends one environment change, and a choice that would spend more than
+    ``max_events`` is not offered."""
+    names = (*model.inputs, *model.int_inputs)
+    ncombo = len(model.combos)
+    rules: list[tuple[int, int, Predicate | None, bool]] = []  # (input number, state position, while, counted)
+    for n, name in enumerate(names):
+        rule = model.input_rules.get(name)
+        if rule is None:
+            continue
+        guard = None
+        if rule.while_:
+            pr = compile_predicate(model, rule.while_, ProgramProperty(f"input {name}", "invariant", rule.while_))
+            if isinstance(pr, Diagnostic):
+                raise ProgramModelError([pr])
+            guard = pr
+        rules.append((n, model.slot_pos[model.input_slots[n]], guard, rule.counted))
+    limit = model.max_events
+    prescan = model.nchoices + len(model.sets) * ncombo
+
+    def successors(s: State) -> tuple[list[tuple[int, State]], int, int]:
+        outs, cv, ex = model.expand(s)
+        if not rules:
+            return outs, cv, ex
+        frozen = [(n, s[pos]) for n, pos, guard, _c in rules if guard is not None and not guard(s)]
+        counted = [(n, s[pos]) for n, pos, _g, c in rules if c]
+        kept: list[tuple[int, State]] = []
+        for ch, t in outs:
+            if ch == prescan and model.prescan_choice:
+                kept.append((ch, t))
+                continue
+            combo = model.combos[(ch - model.nchoices if ch >= model.nchoices else ch) % ncombo]
+            if any(combo[n] != v for n, v in frozen):
+                continue
+            cost = sum(1 for n, v in counted if combo[n] != v)
+            if cost:
+                if t[0] + cost > limit:
+                    continue
+                t = (t[0] + cost, *t[1:])
+            kept.append((ch, t))
+        return kept, cv, ex
+    return successors
 
 
 # --------------------------------------------------------------------------- verdicts

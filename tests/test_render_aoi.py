@@ -16,6 +16,7 @@ accepts, and the artefacts written by ``generate`` / ``docs`` and drawn by ``dia
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 import re
 from pathlib import Path
@@ -26,11 +27,12 @@ from checker import cli
 from statecharts import ir
 from statecharts.loader import load_spec
 from statecharts.render import graphviz_bin, instruction_dot, instruction_mermaid
-from statecharts.render.addon import addon_page, recovery_chart
+from statecharts.render.addon import recovery_chart
 from statecharts.render.dot import chart_dot
 from statecharts.render.flowchart import build_flowchart, split_flowchart
 from statecharts.render.generate import build
 from statecharts.render.mermaid import chart_mermaid
+from statecharts.render.reference import add_on_page
 from statecharts.render.traceability import trace
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -65,7 +67,7 @@ def aoi(spec: ir.Spec) -> ir.AddOnInstruction:
 
 @pytest.fixture(scope="module")
 def page(spec: ir.Spec, aoi: ir.AddOnInstruction) -> str:
-    return addon_page(spec, aoi, trace(spec, []))
+    return add_on_page(spec, aoi, trace(spec, []))
 
 
 def section(page: str, title: str) -> str:
@@ -151,6 +153,39 @@ def test_page_lists_parameters_status_and_local_tags(page: str) -> None:
     assert "MAS" in routines["rung false"]["Also"] and "path_verified" in routines["prescan"]["Also"]
 
 
+def test_page_shows_completion_and_the_objects_it_reads_with_their_sources(page: str) -> None:
+    # SYNC-RM §1.2 note: a path-to-physical sync (SyncType 0) verifies the path's integrity
+    # (what 1016 checks); §1.3.1: Sts.OnPath of the handler is set on completion
+    done = {r["Sets"].strip("`"): r for r in table_rows(section(page, "Completion"))}
+    assert list(done) == ["path_verified", "handler.OnPath"]
+    assert "Cfg_SyncType == 0" in done["path_verified"]["When"] and done["handler.OnPath"]["When"] == "always"
+    assert done["path_verified"]["Source"].startswith("SYNC-RM §1.2") and "§1.3.1" in done["handler.OnPath"]["Source"]
+    # 003 §2.2: the physical axis is an AXIS_CIP_DRIVE, the path axis an AXIS_VIRTUAL, and the handle
+    world = section(page, "The world it runs in")
+    split = world.index("| Object | Fact |")
+    objects = {r["Object"].strip("`"): r for r in table_rows(world[:split])}
+    assert list(objects) == ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL", "handler"]
+    assert objects["AXIS_CIP_DRIVE"]["Chart"] == "[AxisCIP](../charts/AxisCIP.md)"
+    assert all(r["Source"].startswith("SYNC-RM §") for r in objects.values())
+    facts = table_rows(world[split:])
+    assert {"faulted", "shutdown", "energized"} <= {r["Fact"].strip("`") for r in facts if r["Object"] == "`AXIS_VIRTUAL`"}
+    assert all(r["Source"] not in ("", "—") for r in facts)
+
+
+def test_links_into_the_page_name_its_anchors(tmp_path: Path, spec: ir.Spec) -> None:
+    """Every ``instructions/<AOI>.md#fragment`` link of the reference (the users of each
+    interpretation) lands on an anchor or a heading of the page."""
+    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
+    files = build(spec, [], tmp_path, render_svg=fake).files
+    page = files[f"instructions/{AOI_ID}.md"].decode()
+    anchors = set(re.findall(r'<a id="([^"]+)"></a>', page)) | {
+        re.sub(r"[^a-z0-9 _-]", "", h.lower()).replace(" ", "-") for h in re.findall(r"^#+ (.+)$", page, re.M)}
+    links = {m for text in files.values() if text.lstrip().startswith(b"<!--")
+             for m in re.findall(rf"instructions/{AOI_ID}\.md#([^)\s]+)\)", text.decode())}
+    assert {"transition-t1", "state-virtual_done", "check-energized", "the-world-it-runs-in"} <= links
+    assert links <= anchors, links - anchors
+
+
 def test_calls_link_to_the_variant_for_the_axis_data_type(spec: ir.Spec, page: str) -> None:
     rows = table_rows(section(page, "Motion instructions it calls"))
     got = {r["Call"].strip("`").split("(")[0].split("_")[0]: r for r in rows}
@@ -166,7 +201,7 @@ def test_calls_link_to_the_variant_for_the_axis_data_type(spec: ir.Spec, page: s
 
 def test_page_is_deterministic_and_has_no_absolute_path(spec: ir.Spec, page: str) -> None:
     again = load_spec()
-    assert addon_page(again, again.add_on(AOI_ID), trace(again, [])) == page
+    assert add_on_page(again, again.add_on(AOI_ID), trace(again, [])) == page
     assert str(ROOT) not in page and str(Path.home()) not in page
 
 
@@ -203,6 +238,25 @@ def test_flowchart_ends_where_the_recovery_chart_takes_over(spec: ir.Spec, aoi: 
     assert [n.kind for n in fc.nodes if n.id == "recovery"] == ["done"]
     assert f"{AOI_ID}_recovery" in " ".join(fc.note)
     assert "flowchart TD" in instruction_mermaid(spec, aoi)
+
+
+def test_flowchart_and_page_name_the_status_tag_the_instruction_has(spec: ir.Spec, aoi: ir.AddOnInstruction) -> None:
+    """The error boxes, the code columns and the recovery's actions name the members of the
+    instruction's own status tag: renamed there, renamed everywhere."""
+    def out(name: str) -> str:
+        return name.replace("Sts_", "Out_", 1)
+
+    other = dataclasses.replace(
+        aoi, status=tuple(dataclasses.replace(m, name=out(m.name)) for m in aoi.status),
+        rung_false=dataclasses.replace(aoi.rung_false, clear=tuple(map(out, aoi.rung_false.clear))),
+        prescan=dataclasses.replace(aoi.prescan, clear=tuple(map(out, aoi.prescan.clear))))
+    boxes = [n for n in build_flowchart(spec, other).nodes if n.kind == "error"]
+    assert boxes[0].title[:2] == ("Out_ER set", f"Out_ERR = {CHECK_ORDER[0]}")
+    assert not any("Sts_" in line for n in boxes for line in n.title)
+    page = add_on_page(spec, other, trace(spec, []))
+    assert "Out_ERR" in table_rows(section(page, "Checks, in the order they are evaluated"))[0]
+    mmd = chart_mermaid(recovery_chart(spec, other, ordered=True))
+    assert f"Out_ERR = {CALL_CODES['MAH']}" in mmd and "Out_EXERR = MAH.ERR" in mmd and "Sts_" not in mmd
 
 
 # --------------------------------------------------------------------------- recovery chart
@@ -262,7 +316,26 @@ def test_build_writes_the_aoi_artefacts(tmp_path: Path, spec: ir.Spec, aoi: ir.A
     interps = files["interpretations.md"].decode()
     assert f"](instructions/{AOI_ID}.md#check-energized)" in interps  # INT-022's user
     assert f"](instructions/{AOI_ID}.md#the-world-it-runs-in)" in interps  # INT-068's users
+    codes = section(files["error-codes.md"].decode(), "Codes of add-on instructions")  # 003 §2.4: all 21
+    assert re.findall(rf"\[(\d+)\]\(instructions/{AOI_ID}\.md#code-\1\)", codes) == [str(c) for c in ALL_CODES]
     assert not any(name.startswith("aoi/") for name in files)
+
+
+def test_traceability_matrix_lists_the_add_on_states_codes_and_completion(tmp_path: Path, spec: ir.Spec) -> None:
+    fake = lambda src: b'<?xml version="1.0"?>\n<svg/>\n'  # noqa: E731  # no Graphviz needed here
+    matrix = build(spec, [], tmp_path, render_svg=fake).files["traceability.md"].decode()
+    page = f"instructions/{AOI_ID}.md"
+    codes = [r for r in table_rows(section(matrix, "Error codes")) if r["Instruction"] == f"[{AOI_ID}]({page})"]
+    assert [int(r["ERR / EXERR"].split("]")[0][1:]) for r in codes] == ALL_CODES  # 003 §2.4
+    for r in codes:
+        assert r["ERR / EXERR"].endswith(f"({page}#code-{r['ERR / EXERR'].split(']')[0][1:]})")
+    by_code = {int(r["ERR / EXERR"].split("]")[0][1:]): r["Spec elements (checks)"] for r in codes}
+    for mnemonic, code in CALL_CODES.items():  # docs/aoi.md: the calling state reports the call's error
+        assert f"when its {mnemonic} call errs" in by_code[code]
+    states = [r["State"] for r in table_rows(section(matrix, "States")) if r["Chart"].startswith(f"[{AOI_ID}_recovery]")]
+    assert states == [f"[{s.id}]({page}#state-{s.id})" for s in spec.add_on(AOI_ID).recovery.states]
+    done = [r for r in table_rows(section(matrix, "Completion (DN)")) if r["Instruction"] == f"[{AOI_ID}]({page})"]
+    assert len(done) == 1 and "Sts_PC" in done[0]["Spec element"]
 
 
 def test_docs_command_writes_the_aoi_page(tmp_path: Path) -> None:

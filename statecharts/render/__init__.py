@@ -8,15 +8,17 @@ an instruction of the bundled spec):
 
 * :mod:`~statecharts.render.labels` -- the wording all renderers share;
 * :mod:`~statecharts.render.dot` -- chart state diagrams as Graphviz DOT;
-* :mod:`~statecharts.render.flowchart` -- instruction flowcharts (model and DOT);
+* :mod:`~statecharts.render.flowchart` -- flowcharts of ordered checks (model and DOT): an
+  instruction's, and an add-on instruction's up to where its recovery chart takes over;
 * :mod:`~statecharts.render.mermaid` -- both as Mermaid text;
 * :mod:`~statecharts.render.graphviz_bin` -- finds ``dot`` / ``graphviz-pure`` and
   draws SVG or PNG;
 * :mod:`~statecharts.render.scxml` -- charts as W3C SCXML;
 * :mod:`~statecharts.render.traceability` -- runs the scenarios to see what they exercise;
-* :mod:`~statecharts.render.reference` -- the Markdown reference;
-* :mod:`~statecharts.render.addon` -- what is particular to an add-on instruction: its
-  flowchart's tail, its recovery as a chart for the diagram renderers, its page;
+* :mod:`~statecharts.render.reference` -- the Markdown reference: pages of charts, of
+  instructions and of add-on instructions, built from the same sections;
+* :mod:`~statecharts.render.addon` -- an add-on instruction's recovery as a chart, so that
+  the chart renderers draw and table it;
 * :mod:`~statecharts.render.generate` -- every artefact as bytes, written or checked.
 
 >>> from statecharts.loader import load_spec

@@ -17,6 +17,11 @@ spec later -- gets one:
    coarse update, the completion condition (``DN``), the aborts (``ER``), and the loop
    of a request still in progress.
 
+An add-on instruction (:data:`Routine`) gets the same flowchart with its own status tag
+(``Sts_ER``, ``Sts_ERR``) and codes: its execution starts on a rising rung, its ordered
+checks follow, and where an instruction sends its request the add-on instruction's
+recovery chart takes over (drawn as a chart, :mod:`statecharts.render.addon`).
+
 The order of decisions is the spec's order of checks, which is the order in which
 :mod:`statecharts.scan` evaluates them; the flowchart is drawn from the same IR the
 engine runs.
@@ -30,9 +35,13 @@ from dataclasses import dataclass, replace
 import graphviz
 
 from statecharts import ir
+from statecharts.render.addon import RECOVERY_SUFFIX
 from statecharts.render.dot import FONT, MONO, html_lines, html_table, sorted_attrs
-from statecharts.render.labels import paragraph, wrap
+from statecharts.render.labels import error_tags, paragraph, wrap
 
+#: Anything that runs ordered checks when it executes: an instruction, whose request
+#: follows them, or an add-on instruction, whose recovery chart follows them.
+Routine = ir.Instruction | ir.AddOnInstruction
 #: Node kinds of a flowchart and what they mean.
 KINDS = ("terminal", "process", "decision", "error", "done", "wait", "note")
 
@@ -64,10 +73,14 @@ class Flowchart:
     spine: tuple[str, ...]  # the main flow, drawn on one vertical line
 
 
-def _error_name(spec: ir.Spec, ins: ir.Instruction, check: ir.Check) -> str:
+def error_name(spec: ir.Spec, owner: Routine, check: ir.Check) -> str:
+    """The name of the code a failing ``check`` of ``owner`` reports: an add-on
+    instruction's own, else the extended code's or the catalog's."""
+    if isinstance(owner, ir.AddOnInstruction):
+        return next((e.name for e in owner.errors if e.code == check.err), "")
     if check.exerr:
         for x in spec.extended_errors:
-            if (x.instruction, x.err, x.exerr) == (ins.id, check.err, check.exerr):
+            if (x.instruction, x.err, x.exerr) == (owner.id, check.err, check.exerr):
                 return x.name
     try:
         return spec.error(check.err).name
@@ -75,12 +88,13 @@ def _error_name(spec: ir.Spec, ins: ir.Instruction, check: ir.Check) -> str:
         return ""
 
 
-def _error_box(spec: ir.Spec, ins: ir.Instruction, check: ir.Check, node_id: str) -> FlowNode:
-    code = f"ERR = {check.err}" + (f", EXERR = {check.exerr}" if check.exerr else "")
-    name = _error_name(spec, ins, check)
-    detail = tuple(a.text for a in ins.table.on_error if a.text not in ("ER = True",))
-    title = ("ER set", code) + ((name,) if name else ())
-    return FlowNode(node_id, "error", title, detail)
+def _error_box(spec: ir.Spec, owner: Routine, check: ir.Check, node_id: str) -> FlowNode:
+    flag, err, exerr = error_tags(owner)
+    code = f"{err} = {check.err}" + (f", {exerr} = {check.exerr}" if check.exerr else "")
+    name = error_name(spec, owner, check)
+    on_error = owner.table.on_error if isinstance(owner, ir.Instruction) else ()
+    detail = tuple(a.text for a in on_error if a.text != f"{flag} = True")
+    return FlowNode(node_id, "error", (f"{flag} set", code, *(paragraph(name, 34) if name else ())), detail)
 
 
 def check_chain(checks: Sequence[ir.Check], prev: str, title: Callable[[ir.Check], str],
@@ -104,18 +118,13 @@ def check_chain(checks: Sequence[ir.Check], prev: str, title: Callable[[ir.Check
     return prev, message
 
 
-def build_flowchart(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, labels: str = "full") -> Flowchart:
-    """The flowchart of ``ins`` (see the module docstring for what it shows; an add-on
-    instruction's is :func:`statecharts.render.addon.addon_flowchart`).
+def build_flowchart(spec: ir.Spec, ins: Routine, labels: str = "full") -> Flowchart:
+    """The flowchart of ``ins`` (see the module docstring for what it shows).
 
     ``labels`` (:data:`statecharts.render.dot.LABEL_LEVELS`): ``full`` shows every
     condition and action, ``guards`` the conditions without the actions, ``events`` the
     prose alone."""
-    if isinstance(ins, ir.AddOnInstruction):
-        from statecharts.render.addon import addon_flowchart
-        fc = addon_flowchart(spec, ins)
-    else:
-        fc = _build_flowchart(spec, ins)
+    fc = _build_flowchart(spec, ins)
     if labels == "full":
         return fc
     keep_conditions = labels == "guards"
@@ -124,15 +133,34 @@ def build_flowchart(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, la
     return replace(fc, nodes=nodes)
 
 
-def _build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
-    nodes: list[FlowNode] = []
+def _build_flowchart(spec: ir.Spec, ins: Routine) -> Flowchart:
+    """Head (the rung condition), the ordered checks, then the tail: what follows once
+    every check passed (an instruction's request, an add-on instruction's chart)."""
+    nodes: list[FlowNode] = [FlowNode("start", "terminal", ("Rung-condition-in true",))]
     edges: list[FlowEdge] = []
     side: list[tuple[str, str]] = []
+    prev = _head(ins, nodes, edges, side)
+    prev, message = check_chain(ins.checks, prev, lambda c: c.description or f"{error_name(spec, ins, c)}?",
+                                lambda c, eid: _error_box(spec, ins, c, eid), nodes, edges, side)
+    if isinstance(ins, ir.AddOnInstruction):
+        note, tail = _chart_tail(ins, prev, nodes, edges)
+    else:
+        note, tail = _request_tail(spec, ins, prev, message, nodes, edges, side)
+    spine = tuple(n.id for n in nodes if n.kind in ("terminal", "process", "decision") and n.id != "row_skip")
+    return Flowchart(ins.id, f"{ins.id} {ins.name}: execution with rung-condition-in true",
+                     note, tuple(nodes), tuple(edges), tuple(side), spine + tail)
+
+
+def _head(ins: Routine, nodes: list[FlowNode], edges: list[FlowEdge], side: list[tuple[str, str]]) -> str:
+    """The rung-condition-in true row of the execution table (its guard, its actions); an
+    add-on instruction of level execution starts an execution on a rising rung."""
+    prev = "start"
+    if isinstance(ins, ir.AddOnInstruction):
+        nodes.append(FlowNode("execute", "process", ("A new execution starts", "(the rung was false before)")))
+        edges.append(FlowEdge(prev, "execute"))
+        return "execute"
     table = ins.table
     row = table.row("rung_true")
-
-    nodes.append(FlowNode("start", "terminal", ("Rung-condition-in true",)))
-    prev = "start"
     if row is not None and row.guard is not None:
         nodes.append(FlowNode("row_guard", "decision", ("Execute now?",), (row.guard.text,)))
         nodes.append(FlowNode("row_skip", "terminal", ("No action",)))
@@ -143,11 +171,25 @@ def _build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
     acts = tuple(a.text for a in (row.actions if row else ())) + tuple(a.text for a in table.on_execute)
     nodes.append(FlowNode("execute", "process", ("Instruction executes",), acts))
     edges.append(FlowEdge(prev, "execute", "yes" if prev == "row_guard" else ""))
-    prev = "execute"
+    return "execute"
 
-    prev, message_note = check_chain(ins.checks, prev, lambda c: c.description,
-                                     lambda c, eid: _error_box(spec, ins, c, eid), nodes, edges, side)
 
+def _chart_tail(a: ir.AddOnInstruction, prev: str, nodes: list[FlowNode],
+                edges: list[FlowEdge]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Every check passed: the recovery chart takes over (its diagram is the add-on
+    instruction's ``<id>_recovery``)."""
+    flag = error_tags(a)[0]
+    nodes.append(FlowNode("recovery", "done", ("Every check passed:", f"the recovery chart leaves {a.recovery.initial}")))
+    edges.append(FlowEdge(prev, "recovery", "no" if a.checks else ""))
+    return (f"The checks run top to bottom when an execution starts; the first that holds sets {flag} and its code,",
+            f"which stay until the rung goes false; then the recovery chart ({a.id}{RECOVERY_SUFFIX}) runs."), ("recovery",)
+
+
+def _request_tail(spec: ir.Spec, ins: ir.Instruction, prev: str, message_note: bool, nodes: list[FlowNode],
+                  edges: list[FlowEdge], side: list[tuple[str, str]]) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Every check passed: the request, its completion (DN), the aborts (ER) and the loop
+    of a request still in progress."""
+    table = ins.table
     accept = ["Request accepted"]
     accept_detail = [a.text for a in table.on_accept]
     if ins.request is not None:
@@ -190,9 +232,7 @@ def _build_flowchart(spec: ir.Spec, ins: ir.Instruction) -> Flowchart:
     if message_note:
         note.append("When the motion task processes the request at the coarse update, every check is")
         note.append("evaluated again in this order against the axis as it is then.")
-    spine = tuple(n.id for n in nodes if n.kind in ("terminal", "process", "decision") and n.id != "row_skip")
-    return Flowchart(ins.id, f"{ins.id} {ins.name}: execution with rung-condition-in true",
-                     tuple(note), tuple(nodes), tuple(edges), tuple(side), spine)
+    return tuple(note), ()
 
 
 # --------------------------------------------------------------------------- parts
@@ -243,7 +283,7 @@ def split_flowchart(fc: Flowchart) -> list[tuple[str, Flowchart]]:
     return parts
 
 
-def flowchart_part_names(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction) -> tuple[str, ...]:
+def flowchart_part_names(spec: ir.Spec, ins: Routine) -> tuple[str, ...]:
     """``whole``, and ``part1`` ... for a flowchart long enough to be split."""
     return ("whole", *(name for name, _fc in split_flowchart(build_flowchart(spec, ins))))
 
@@ -321,7 +361,7 @@ def flowchart_dot(fc: Flowchart) -> str:
     return str(g.source)
 
 
-def instruction_dot(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, *, labels: str | None = None, part: str = "whole") -> str:
+def instruction_dot(spec: ir.Spec, ins: Routine, *, labels: str | None = None, part: str = "whole") -> str:
     """The DOT text of ``ins``'s flowchart (``part``: ``whole`` or a name of
     :func:`flowchart_parts`; KeyError for another)."""
     from statecharts.render.dot import DEFAULT_LABELS, check_labels
@@ -332,5 +372,6 @@ def instruction_dot(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, *,
     return flowchart_dot(fc)
 
 
-__all__ = ["PART_CHECKS", "FlowEdge", "FlowNode", "Flowchart", "build_flowchart", "check_chain", "flowchart_dot",
+__all__ = ["PART_CHECKS", "FlowEdge", "FlowNode", "Flowchart", "Routine", "build_flowchart", "check_chain",
+           "error_name", "flowchart_dot",
            "flowchart_part_names", "instruction_dot", "split_flowchart"]

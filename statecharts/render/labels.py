@@ -29,6 +29,19 @@ def state_title(state: ir.State) -> str:
     return f"{state.name} ({state.value})"
 
 
+def error_tags(owner: ir.Instruction | ir.AddOnInstruction) -> tuple[str, str, str]:
+    """The flag and the two code members a failing check of ``owner`` sets: ``ER``,
+    ``ERR`` and ``EXERR`` of the MOTION_INSTRUCTION tag; an add-on instruction's own
+    status tag has them under a prefix (``Sts_ER``, ``Sts_ERR``, ``Sts_EXERR``)."""
+    if isinstance(owner, ir.AddOnInstruction):
+        names = {m.name for m in owner.status}
+        for n in sorted(names):
+            prefix = n.removesuffix("ERR")
+            if n != prefix and not prefix.endswith("EX") and f"{prefix}ER" in names:
+                return f"{prefix}ER", n, f"{prefix}EXERR"
+    return "ER", "ERR", "EXERR"
+
+
 def wrap(text: str, width: int = WRAP) -> list[str]:
     """Break ``text`` into lines at spaces (never inside a word or a quoted string)."""
     words = _tokens(text)

@@ -17,7 +17,7 @@ same spec gives the same bytes.
 from __future__ import annotations
 
 from statecharts import ir
-from statecharts.render.flowchart import Flowchart, build_flowchart
+from statecharts.render.flowchart import Flowchart, Routine, build_flowchart
 from statecharts.render.labels import children, internal_transitions, state_title
 
 INDENT = "    "
@@ -152,6 +152,6 @@ def flowchart_mermaid(fc: Flowchart) -> str:
     return "\n".join(out) + "\n"
 
 
-def instruction_mermaid(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction) -> str:
+def instruction_mermaid(spec: ir.Spec, ins: Routine) -> str:
     """The Mermaid flowchart of ``ins``."""
     return flowchart_mermaid(build_flowchart(spec, ins))

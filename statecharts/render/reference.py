@@ -22,8 +22,9 @@ from typing import Any
 
 from statecharts import ir
 from statecharts.render import views
-from statecharts.render.flowchart import flowchart_part_names
-from statecharts.render.labels import spec_path, state_title, where
+from statecharts.render.addon import RECOVERY_SUFFIX, call_text, recovery_chart, transition_id
+from statecharts.render.flowchart import Routine, flowchart_part_names
+from statecharts.render.labels import error_tags, spec_path, state_title, where
 from statecharts.render.mermaid import chart_mermaid, instruction_mermaid
 from statecharts.render.traceability import ScenarioRun, Traceability
 
@@ -137,12 +138,32 @@ def interpretation_uses(spec: ir.Spec) -> dict[str, list[Use]]:
         add(code.provenance, f"error code {code.code} {code.name}", f"error-codes.md#{anchor('err-' + str(code.code))}")
     for x in spec.extended_errors:
         add(x.provenance, f"{x.instruction} extended error {x.err}/{x.exerr} {x.name}", "error-codes.md#extended-error-codes")
-    if spec.add_ons:
-        from statecharts.render.addon import addon_uses
-        for a in spec.add_ons:
-            for prov, label, link in addon_uses(a):
-                add(prov, label, link)
+    for a in spec.add_ons:
+        for prov, label, link in add_on_uses(a):
+            add(prov, label, link)
     return {k: sorted(set(v), key=lambda u: u.label) for k, v in sorted(uses.items())}
+
+
+def add_on_uses(a: ir.AddOnInstruction) -> list[tuple[ir.Provenance, str, str]]:
+    """(provenance, label, link) of every element of an add-on instruction, linked to its
+    row on the instruction's page."""
+    groups: list[tuple[Sequence[Any], str, str]] = [
+        ((a,), "add-on instruction", ""), ((a.execution,), "execution", ""),
+        ((a.recovery,), "recovery chart", "recovery-chart"),
+        (a.parameters, "parameter {x.name}", "parameters"), (a.status, "status {x.name}", "status-tag"),
+        (a.local_tags, "local tag {x.name}", "local-tags"), (a.errors, "error code {x.code}", "code-{x.code}"),
+        (a.checks, "check {x.id}", "check-{x.id}"), (a.recovery.states, "recovery state {x.id}", "state-{x.id}"),
+        (a.on_done, "on done, set {x.set}", "completion"), ((a.world,), "world", "the-world-it-runs-in"),
+        (a.world.objects, "world object {x.kind} ({x.chart})", "the-world-it-runs-in"),
+        ([f for o in a.world.objects for f in o.facts], "world fact {x.name}", "the-world-it-runs-in"),
+        ((a.rung_false,), "rung-false routine", "rung-false-and-prescan"),
+        ((a.prescan,), "prescan routine", "rung-false-and-prescan")]
+    page = f"instructions/{a.id}.md"
+    out = [(x.provenance, f"{a.id} {label.format(x=x)}", page + (f"#{anchor(frag.format(x=x))}" if frag else ""))
+           for xs, label, frag in groups for x in xs]
+    return out + [(t.provenance, f"{a.id} transition {t.source} -> {t.target}",
+                   f"{page}#{anchor('transition-' + transition_id(n))}")
+                  for n, t in enumerate(a.recovery.transitions, start=1)]
 
 
 # --------------------------------------------------------------------------- pages
@@ -228,23 +249,24 @@ def variables_table(variables: Sequence[ir.Variable], p: str) -> list[str]:
     ])
 
 
-def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool = True) -> str:
-    p = "../"
-    out = [GENERATED_NOTE, "", f"# {chart.name} (`{chart.id}`)", ""]
-    out += [cell(chart.description), ""]
-    out += [f"- Source: {cell(chart.provenance.source)}"]
-    if chart.provenance.interpretation:
-        out += [f"- Interpretation: {interp_link(chart.provenance.interpretation, p)}"]
-    out += [
-        f"- Axis data types: {', '.join(f'`{t}`' for t in chart.axis_types)}",
-        f"- State attribute: `{chart.state_attribute}` (the value in brackets after each state name)",
-        f"- Initial state: `{chart.root_initial}`",
-        f"- Defined at: `{where(spec, chart.location)}`",
-        *([f"- SCXML export: [`scxml/{chart.id}.scxml`]({p}scxml/{chart.id}.scxml)"] if scxml else []),
-        "",
-        "## Diagram",
-        "",
-    ]
+def page_head(spec: ir.Spec, title: str, record: Any, facts: Sequence[str], p: str,
+              after: Sequence[str] = ()) -> list[str]:
+    """The top of a page: its title, the ``record``'s description, source and
+    interpretation, the ``facts`` (Markdown list items), where it is defined, ``after``."""
+    out = [GENERATED_NOTE, "", f"# {title}", "", cell(record.description), "",
+           f"- Source: {cell(record.provenance.source)}"]
+    if record.provenance.interpretation:
+        out += [f"- Interpretation: {interp_link(record.provenance.interpretation, p)}"]
+    return [*out, *facts, f"- Defined at: `{where(spec, record.location)}`", *after]
+
+
+def chart_sections(spec: ir.Spec, chart: ir.Chart, tr: Traceability, p: str, *, heading: str = "## Diagram",
+                   level: str = "##", drawn: ir.Chart | None = None,
+                   reaching: Callable[[str], list[ScenarioRun]] | None = None, states_note: str = "") -> list[str]:
+    """A chart's diagram (``diagrams/<id>.*``, its views when it is split), then its states
+    and transitions tables under ``level`` headings; ``drawn``: the chart the Mermaid block
+    shows when it is not ``chart`` (the same states and transitions, labelled for drawing)."""
+    out = [heading, ""]
     if views.is_split(chart):
         parts = [n for n in views.view_names(chart) if n not in (views.WHOLE, views.OVERVIEW)]
         links = ", ".join(f"[{n}](#{anchor('part-' + n)})" for n in parts)
@@ -257,14 +279,25 @@ def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool 
                 f"Source: [Graphviz DOT]({p}diagrams/{ov}.dot).", ""]
         for n in parts:
             st = views.stem(chart, n)
-            out += [f'<a id="{anchor("part-" + n)}"></a>', "", f"### {chart.state(n).name} (`{n}`)", "",
+            out += [f'<a id="{anchor("part-" + n)}"></a>', "", f"{level}# {chart.state(n).name} (`{n}`)", "",
                     f"![{n} part of {chart.id}]({p}diagrams/{st}.svg)", "",
                     f"Source: [Graphviz DOT]({p}diagrams/{st}.dot).", ""]
-        out += ["### The whole chart", ""]
-    out += diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(chart), f"{p}diagrams/{chart.id}.mmd",
-                          f"{p}diagrams/{chart.id}.dot", f"State diagram of {chart.id}")
-    out += ["", "## States", "", *states_table(spec, chart, tr, p)]
-    out += ["", "## Transitions", "", TRANSITIONS_NOTE, "", *transitions_table(spec, chart, p)]
+        out += [f"{level}# The whole chart", ""]
+    out += diagram_block(f"{p}diagrams/{chart.id}.svg", chart_mermaid(drawn or chart), f"{p}diagrams/{chart.id}.mmd",
+                         f"{p}diagrams/{chart.id}.dot", f"State diagram of {chart.id}")
+    out += ["", f"{level} States", "", *([states_note, ""] if states_note else []),
+            *states_table(spec, chart, tr, p, reaching)]
+    return [*out, "", f"{level} Transitions", "", TRANSITIONS_NOTE, "", *transitions_table(spec, chart, p)]
+
+
+def chart_page(spec: ir.Spec, chart: ir.Chart, tr: Traceability, *, scxml: bool = True) -> str:
+    p = "../"
+    out = page_head(spec, f"{chart.name} (`{chart.id}`)", chart, [
+        f"- Axis data types: {', '.join(f'`{t}`' for t in chart.axis_types)}",
+        f"- State attribute: `{chart.state_attribute}` (the value in brackets after each state name)",
+        f"- Initial state: `{chart.root_initial}`"], p,
+        [*([f"- SCXML export: [`scxml/{chart.id}.scxml`]({p}scxml/{chart.id}.scxml)"] if scxml else []), ""])
+    out += chart_sections(spec, chart, tr, p)
     out += ["", "## Events", ""]
     out += table(["Event", "Kind", "Meaning", "Changes before the chart sees it", "Source", "Interpretation"], [
         [f"`{e.name}`", e.kind, cell(e.description), code("; ".join(a.text for a in e.actions)) if e.actions else "—",
@@ -295,7 +328,7 @@ def _error_label(spec: ir.Spec, ins: ir.Instruction, err: int, exerr: int) -> tu
     return e.name, e.meaning, confidence(e.confidence), e.provenance.source
 
 
-def flowchart_section(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, p: str) -> list[str]:
+def flowchart_section(spec: ir.Spec, ins: Routine, p: str) -> list[str]:
     """The flowchart of ``ins``: its parts when it is long, then the whole (SVG and Mermaid)."""
     out = []
     parts = [n for n in flowchart_part_names(spec, ins) if n != "whole"]
@@ -309,13 +342,21 @@ def flowchart_section(spec: ir.Spec, ins: ir.Instruction | ir.AddOnInstruction, 
                                 f"{p}flowcharts/{ins.id}.mmd", f"{p}flowcharts/{ins.id}.dot", f"Flowchart of {ins.id}")
 
 
-def checks_table(spec: ir.Spec, checks: Sequence[ir.Check], label: Callable[[ir.Check], tuple[str, str, str, str]],
-                 p: str, codes: tuple[str, str] = ("ERR", "EXERR")) -> list[str]:
-    """Ordered checks, numbered in evaluation order; ``label``: (name, meaning, confidence,
-    source) of a check's code; ``codes``: the headers of its two code columns."""
+def code_label(spec: ir.Spec, owner: Routine, err: int, exerr: int = 0) -> tuple[str, str, str, str]:
+    """(name, meaning, confidence, source) of a code of ``owner``: an add-on instruction's
+    own code, else the ERR/EXERR pair of the catalogs."""
+    if isinstance(owner, ir.AddOnInstruction):
+        e = next((e for e in owner.errors if e.code == err), None)
+        return (e.name, e.description, "", e.provenance.source) if e else ("", "", "", "")
+    return _error_label(spec, owner, err, exerr)
+
+
+def checks_section(spec: ir.Spec, owner: Routine, intro: str, p: str) -> list[str]:
+    """``owner``'s ordered checks, numbered in evaluation order, under their heading; the
+    two code columns are named after what a failing check sets (``ERR``, ``Sts_ERR``, ...)."""
     rows = []
-    for n, ch in enumerate(checks, start=1):
-        name, _meaning, conf, _src = label(ch)
+    for n, ch in enumerate(owner.checks, start=1):
+        name, _meaning, conf, _src = code_label(spec, owner, ch.err, ch.exerr)
         rows.append([
             str(n), f'<a id="{anchor("check-" + ch.id)}"></a>`{ch.id}`', code(ch.fails_when.text), ch.stage.value,
             str(ch.err), str(ch.exerr) if ch.exerr else "—", cell(name), cell(ch.description),
@@ -323,25 +364,22 @@ def checks_table(spec: ir.Spec, checks: Sequence[ir.Check], label: Callable[[ir.
             interp_link(ch.provenance.interpretation, p) if ch.provenance.interpretation else cell(conf),
             f"`{where(spec, ch.location)}`",
         ])
-    return table(["#", "Check", "Fails when", "Stage", *codes, "Error", "Meaning", "Source",
-                  "Interpretation / confidence", "Defined at"], rows)
+    return ["## Checks, in the order they are evaluated", "", intro, "", *table(
+        ["#", "Check", "Fails when", "Stage", *error_tags(owner)[1:], "Error", "Meaning", "Source",
+         "Interpretation / confidence", "Defined at"], rows)]
+
+
+def check_producers(checks: Iterable[ir.Check], kind: Callable[[ir.Check], str] = lambda c: "check") -> tuple[str, ...]:
+    """``check [`id`](#check-id) when `condition```: how each of ``checks`` reports its code."""
+    return tuple(f"{kind(c)} [`{c.id}`](#{anchor('check-' + c.id)}) when {code(c.fails_when.text)}" for c in checks)
 
 
 def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> str:
     p = "../"
-    out = [GENERATED_NOTE, "", f"# {ins.id}: {ins.name}", "", cell(ins.description), ""]
-    out += [f"- Source: {cell(ins.provenance.source)}"]
-    if ins.provenance.interpretation:
-        out += [f"- Interpretation: {interp_link(ins.provenance.interpretation, p)}"]
-    out += [
+    out = page_head(spec, f"{ins.id}: {ins.name}", ins, [
         f"- Charts: {', '.join(f'[{c}]({p}charts/{c}.md)' for c in ins.charts)}",
         f"- Axis data types: {', '.join(f'`{t}`' for t in ins.axis_types)}",
-        f"- Execution: {ins.execution} (execution table `{ins.table.id}`)",
-        f"- Defined at: `{where(spec, ins.location)}`",
-        "",
-        "## Flowchart",
-        "",
-    ]
+        f"- Execution: {ins.execution} (execution table `{ins.table.id}`)"], p, ["", "## Flowchart", ""])
     out += flowchart_section(spec, ins, p)
     out += ["", "## Operands", ""]
     rows = []
@@ -358,11 +396,10 @@ def instruction_page(spec: ir.Spec, ins: ir.Instruction, tr: Traceability) -> st
                      cell(o.description), cell(o.provenance.source), interp_link(o.provenance.interpretation, p)])
     out += table(["Operand", "Type", "Values explored / range", "Default", "Meaning", "Source", "Interpretation"], rows)
 
-    out += ["", "## Checks, in the order they are evaluated", "",
-            "The first check whose condition holds ends the instruction with `ER` and its code. A check of "
-            "stage `message` is answered by the motion task when it processes the request at the coarse "
-            "update; at that point every check is evaluated again, in this order.", ""]
-    out += checks_table(spec, ins.checks, lambda ch: _error_label(spec, ins, ch.err, ch.exerr), p)
+    out += ["", *checks_section(spec, ins, "The first check whose condition holds ends the instruction with `ER` and "
+                                "its code. A check of stage `message` is answered by the motion task when it processes "
+                                "the request at the coarse update; at that point every check is evaluated again, in "
+                                "this order.", p)]
     if ins.aborts:
         out += ["", "## Aborts of a request in progress", "",
                 "Evaluated at each coarse update while the request waits for its completion condition.", ""]
@@ -480,9 +517,7 @@ def instruction_codes(spec: ir.Spec, ins: ir.Instruction, tr: Traceability, pref
         name, meaning, conf, src = _error_label(spec, ins, err, exerr)
         interps = tuple(sorted({c.provenance.interpretation for c in checks if c.provenance.interpretation}
                                | set(_extended_interpretation(spec, ins, err, exerr))))
-        produced = tuple(
-            f"{'abort' if c.id in aborts else 'check'} [`{c.id}`](#{anchor('check-' + c.id)}) when "
-            f"{code(c.fails_when.text)}" for c in checks)
+        produced = check_producers(checks, lambda c: "abort" if c.id in aborts else "check")
         others: tuple[str, ...] = ()
         if not produced:
             by = []
@@ -503,6 +538,80 @@ def _extended_interpretation(spec: ir.Spec, ins: ir.Instruction, err: int, exerr
     return [x.provenance.interpretation for x in spec.extended_errors
             if x.instruction in (ins.id, ins.mnemonic) and (x.err, x.exerr) == (err, exerr)
             and x.provenance.interpretation]
+
+
+def add_on_codes(spec: ir.Spec, a: ir.AddOnInstruction, tr: Traceability, prefix: str) -> list[DocumentedCode]:
+    """Every code of ``a`` by number, with the checks and the calling states that report it."""
+    return [DocumentedCode(
+        (f'<a id="{anchor(f"code-{e.code}")}"></a>{e.code}',), e.name, e.description, e.provenance.source, "",
+        tuple(filter(None, [e.provenance.interpretation])),
+        (*check_producers(c for c in a.checks if c.err == e.code),
+         *(f"state [`{s.id}`](#{anchor('state-' + s.id)}) when its {s.call.instruction} call errs"
+           for s in a.recovery.states if s.call is not None and s.error == e.code)),
+        scenario_links(tr.aoi_producing(e.code), prefix, 3, tr.link_base) if tr.root is not None else "—")
+        for e in sorted(a.errors, key=lambda e: e.code)]
+
+
+def recovery_reaching(chart: ir.Chart, tr: Traceability) -> Callable[[str], list[ScenarioRun]]:
+    """The runs that observed an add-on instance in a state of its recovery ``chart`` (in
+    a composite: in a state inside it)."""
+    return lambda sid: sorted({r for c in chart.state(sid).children or (sid,) for r in tr.aoi_reaching(c)})
+
+
+def add_on_page(spec: ir.Spec, a: ir.AddOnInstruction, tr: Traceability) -> str:
+    """``instructions/<ID>.md``: the page of an instruction (flowchart, ordered checks,
+    codes) with what an add-on instruction has besides: parameters, its status tag, local
+    tags, the recovery chart drawn and tabled like a chart, the calls it makes, its
+    rung-false and prescan routines, its completion and the objects it reads."""
+    p, chart = "../", recovery_chart(spec, a)
+    flag, err, exerr = error_tags(a)
+    calls = [(s, *call_text(spec, a, s.call)) for s in a.recovery.states if s.call is not None]
+    out = page_head(spec, f"{a.id}: {a.name} (add-on instruction)", a, [
+        f"- Execution: {a.execution.mode} ({cell(a.execution.provenance.source)})",
+        f"- Calls: {', '.join(sorted({f'[{i.id}]({i.id}.md)' for _s, _t, i in calls if i}))}"], p,
+        ["", "## Flowchart", ""])
+    out += [*flowchart_section(spec, a, p), "", "## Parameters", "", "In Logix order.", ""]
+    out += sourced_table(spec, ["Parameter", "Usage", "Type", "Data type", "Default", "Meaning"], [(
+        [f"`{x.name}`" + (f" (`{x.alias}`)" if x.alias else ""), x.usage, x.type, cell(x.data_type or ""),
+         cell("" if x.default is None else str(x.default).lower() if isinstance(x.default, bool) else x.default),
+         cell(x.description)], x) for x in a.parameters], p)
+    out += ["", "## Status tag", "", *sourced_table(spec, ["Member", "Type", "Meaning"], [
+        ([f"`{m.name}`", m.type, cell(m.description)], m) for m in a.status], p)]
+    out += ["", "## Local tags", "", *variables_table(a.local_tags, p), "", *checks_section(
+        spec, a, f"When an execution starts, the first check whose condition holds ends it with `{flag}` and its "
+                 "code; when none holds, the recovery chart runs.", p)]
+    out += ["", "## Error codes", "", f"Every code the instruction reports in `{err}`; a call that errs puts "
+            f"its own `.ERR` in `{exerr}`.", "", *documented_codes_table((err,), add_on_codes(spec, a, tr, p), p), ""]
+    out += chart_sections(
+        spec, chart, tr, p, heading="## Recovery chart", level="###", drawn=recovery_chart(spec, a, ordered=True),
+        reaching=recovery_reaching(chart, tr),
+        states_note="*Scenarios reaching it*: the scenarios in which an instance was in the state at the end of a "
+                    "scan; a state left in the scan it is entered (`checking`, a call that completes at once) is "
+                    "passed through unobserved.")
+    out += ["", "## Motion instructions it calls", "", *sourced_table(
+        spec, ["State", "Call", "Instruction page", f"{a.id} code if it errs"], [(
+            [f"[`{s.id}`](#{anchor('state-' + s.id)})", code(text), f"[{i.id}]({i.id}.md)" if i else "—",
+             f"[{s.error}](#{anchor(f'code-{s.error}')})"], s) for s, text, i in calls], p)]
+    out += ["", "## Rung false and prescan", "", *sourced_table(spec, ["Routine", "Clears", "Also"], [(
+        [name, ", ".join(f"`{m}`" for m in r.clear), cell("; ".join(
+            [f"a call in process is stopped with {r.abort_call}"] * bool(r.abort_call)
+            + [f"forgets {', '.join(r.forget)}"] * bool(r.forget)))], r)
+        for name, r in (("rung false", a.rung_false), ("prescan", a.prescan))], p)]
+    out += ["", "## Completion", "", f"In state [`done`](#state-done) the instruction completes (`{flag[:-2]}PC`) "
+            "and sets:", "", *sourced_table(spec, ["Sets", "When"], [
+                ([f"`{o.set}`", code(o.when.text) if o.when.text != "True" else "always"], o) for o in a.on_done], p)]
+    if tr.root is not None:
+        out += ["", f"Scenarios that complete it: {scenario_links(tr.aoi_completing(), p, base=tr.link_base)}"]
+    out += ["", "## The world it runs in", "", "What the checks and calls read of the objects it is given "
+            f"(`phy.faulted`, `handler.mode`, ...), from their charts. Source: {cell(a.world.provenance.source)}"
+            + (f"; interpretation {interp_link(a.world.provenance.interpretation, p)}"
+               if a.world.provenance.interpretation else "") + ".", ""]
+    out += sourced_table(spec, ["Object", "Chart"], [
+        ([f"`{o.kind}`", f"[{o.chart}]({p}charts/{o.chart}.md)"], o) for o in a.world.objects], p)
+    out += ["", *sourced_table(spec, ["Object", "Fact", "Read from"], [(
+        [f"`{o.kind}`", f"`{f.name}`", code(f.when.text) if f.when is not None else f"variable `{f.variable}`"], f)
+        for o in a.world.objects for f in o.facts], p)]
+    return "\n".join(out) + "\n"
 
 
 @dataclass(frozen=True, slots=True)
@@ -614,7 +723,8 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
             used.setdefault(ch.err, []).append((ins, ch))
     out = [GENERATED_NOTE, "", "# Error codes", "",
            "The generic `ERR` codes of motion instructions, and the extended codes (`EXERR`) specific "
-           "to an instruction. *Used by* lists the checks that report a code.", "",
+           "to an instruction. *Used by* lists the checks that report a code."
+           + (" The codes of add-on instructions are indexed at the end." if spec.add_ons else ""), "",
            "## Generic error codes (ERR)", ""]
     rows = []
     for e in spec.errors:
@@ -640,6 +750,14 @@ def error_codes_page(spec: ir.Spec, tr: Traceability) -> str:
         ])
     out += table(["Instruction", "ERR", "EXERR", "Name", "Meaning", "Confidence", "Source", "Interpretation",
                   "Used by"], rows)
+    if spec.add_ons:
+        out += ["", "## Codes of add-on instructions", "",
+                "An add-on instruction reports codes of its own in its status tag; each is described, with what "
+                "reports it and the scenarios producing it, on the instruction's page.", ""]
+        out += table(["Add-on instruction", "Status tag member", "Codes"], [
+            [f"[{a.id}](instructions/{a.id}.md)", f"`{error_tags(a)[1]}`", ", ".join(
+                f"[{e.code}](instructions/{a.id}.md#{anchor(f'code-{e.code}')})"
+                for e in sorted(a.errors, key=lambda e: e.code))] for a in spec.add_ons])
     return "\n".join(out) + "\n"
 
 
@@ -649,9 +767,9 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
            "exercise it. Scenarios are *run* on the engine to fill this page: a scenario counts for a state "
            "when some scan observes the axis in it (or in a state inside it), and for an error code when "
            "some scan observes the instruction's tag with `ER` set and that `ERR` / `EXERR`. Their "
-           "`covers:` lists are shown at the end, beside what the runs observed. For an add-on instruction "
-           "scenario they are read from its instances (`AOI.<state>` of the recovery chart, `AOI <Sts_ERR>` "
-           "with `Sts_ER` set); the add-on instruction's own page lists them by code and state.", ""]
+           "`covers:` lists are shown at the end, beside what the runs observed. An add-on instruction is "
+           "listed with the others: its recovery chart's states and its own codes, read from its instances "
+           "in the scenarios (`AOI.<state>` of the recovery chart, `AOI <Sts_ERR>` with `Sts_ER` set).", ""]
     if tr.root is None:
         out += ["_No scenario directory was found, so no scenario is listed._", ""]
     else:
@@ -669,6 +787,16 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
                 f"[{c.id}](charts/{c.id}.md)", f"[{cell(state_title(s))}](charts/{c.id}.md#{anchor('state-' + s.id)})",
                 f"`{c.id}.states.{s.id}` (`{where(spec, s.location)}`)", scenario_links(runs, "", base=tr.link_base),
             ])
+    for a in spec.add_ons:
+        page, chart = f"instructions/{a.id}.md", recovery_chart(spec, a)
+        reaching = recovery_reaching(chart, tr)
+        for rs in a.recovery.states:
+            runs = reaching(rs.id)
+            gaps_states += not runs
+            rows.append([
+                f"[{chart.id}]({page}#recovery-chart)", f"[{cell(rs.id)}]({page}#{anchor('state-' + rs.id)})",
+                f"`{a.id}.recovery.states.{rs.id}` (`{where(spec, rs.location)}`)",
+                scenario_links(runs, "", base=tr.link_base)])
     out += table(["Chart", "State", "Spec element", "Scenarios reaching it"], rows)
     out += ["", "## Error codes", ""]
     rows = []
@@ -687,16 +815,40 @@ def traceability_page(spec: ir.Spec, tr: Traceability) -> str:
                             f"(`{where(spec, c.location)}`)" for c in checks),
                 scenario_links(runs, "", base=tr.link_base),
             ])
+    for a in spec.add_ons:
+        page = f"instructions/{a.id}.md"
+        for e in sorted(a.errors, key=lambda e: e.code):
+            runs = tr.aoi_producing(e.code)
+            gaps_codes += not runs
+            rows.append([
+                f"[{a.id}]({page})", f"[{e.code}]({page}#{anchor(f'code-{e.code}')})", cell(e.name), "<br>".join(
+                    [f"[`{a.id}.{c.id}`]({page}#{anchor('check-' + c.id)}) (`{where(spec, c.location)}`)"
+                     for c in a.checks if c.err == e.code]
+                    + [f"[`{a.id}.recovery.states.{rs.id}`]({page}#{anchor('state-' + rs.id)}) when its "
+                       f"{rs.call.instruction} call errs (`{where(spec, rs.location)}`)"
+                       for rs in a.recovery.states if rs.call is not None and rs.error == e.code]),
+                scenario_links(runs, "", base=tr.link_base)])
     out += table(["Instruction", "ERR / EXERR", "Name", "Spec elements (checks)", "Scenarios producing it"], rows)
     out += ["", "## Completion (DN)", ""]
     out += table(["Instruction", "Spec element", "Scenarios completing it"], [
         [f"[{i.id}](instructions/{i.id}.md)", f"`{i.id}.done` (`{where(spec, i.location)}`)",
          scenario_links(tr.completing(i.id), "", base=tr.link_base)]
         for i in spec.instructions
+    ] + [
+        [f"[{a.id}](instructions/{a.id}.md)", f"`{a.id}.recovery.states.done`, {error_tags(a)[0][:-2]}PC "
+         f"(`{where(spec, a.recovery.state('done').location)}`)",
+         scenario_links(tr.aoi_completing(), "", base=tr.link_base)]
+        for a in spec.add_ons
     ])
     out += ["", "## Gaps", ""]
-    out += [f"- States no scenario reaches: {gaps_states}",
-            f"- Error codes no scenario produces: {gaps_codes}", ""]
+    out += [f"- States no scenario reaches: {gaps_states}"]
+    unseen = [f"`{rs.id}`" for a in spec.add_ons for rs in a.recovery.states
+              if not recovery_reaching(recovery_chart(spec, a), tr)(rs.id)]
+    if unseen:
+        out += [f"  - of them, recovery states of an add-on instruction: {len(unseen)} ({', '.join(unseen)}); "
+                "an instance is observed at the end of a scan, so a state it leaves in the scan it enters it "
+                "(`checking`, a call that completes at once) is not seen"]
+    out += [f"- Error codes no scenario produces: {gaps_codes}", ""]
     if tr.runs:
         out += ["## Scenarios", ""]
         out += table(["Scenario", "Result", "Scans", "Declares it covers", "Sources", "States observed",
@@ -727,7 +879,8 @@ def index_page(spec: ir.Spec, *, scxml: bool) -> str:
         for c in spec.charts
     ])
     out += ["", "## Instructions", ""]
-    recovery = {a.id: f" (add-on instruction; [recovery chart](diagrams/{a.id}_recovery.svg))" for a in spec.add_ons}
+    recovery = {a.id: f" (add-on instruction; [recovery chart](diagrams/{a.id}{RECOVERY_SUFFIX}.svg))"
+                for a in spec.add_ons}
     listed: list[ir.Instruction | ir.AddOnInstruction] = [*spec.instructions, *spec.add_ons]
     out += table(["Instruction", "Name", "Checks", "Flowchart", "Spec file"], [
         [f"[{i.id}](instructions/{i.id}.md)", cell(i.name) + recovery.get(i.id, ""), str(len(i.checks)),
@@ -767,8 +920,6 @@ def reference_pages(spec: ir.Spec, tr: Traceability, *, scxml: bool) -> dict[str
         pages[f"charts/{c.id}.md"] = chart_page(spec, c, tr, scxml=scxml)
     for i in spec.instructions:
         pages[f"instructions/{i.id}.md"] = instruction_page(spec, i, tr)
-    if spec.add_ons:
-        from statecharts.render.addon import addon_page
-        for a in spec.add_ons:
-            pages[f"instructions/{a.id}.md"] = addon_page(spec, a, tr)
+    for a in spec.add_ons:
+        pages[f"instructions/{a.id}.md"] = add_on_page(spec, a, tr)
     return pages

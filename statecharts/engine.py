@@ -183,7 +183,7 @@ def machine_class(chart: ir.Chart) -> tuple[type[StateChart[Any]], type[ChartMod
     return machine, model_cls
 
 
-def initial_env(chart: ir.Chart, parameters: Mapping[str, int] | None = None) -> dict[str, object]:
+def initial_env(chart: ir.Chart, parameters: Mapping[str, object] | None = None) -> dict[str, object]:
     env: dict[str, object] = {v.name: v.initial for v in chart.variables}
     env.update(DEFAULT_PARAMETERS)
     if parameters:
@@ -201,7 +201,7 @@ class AxisInstance:
         *,
         state: str | None = None,
         variables: Mapping[str, object] | None = None,
-        parameters: Mapping[str, int] | None = None,
+        parameters: Mapping[str, object] | None = None,
     ) -> None:
         self.chart = chart
         self.name = name

@@ -47,6 +47,7 @@ from types import MappingProxyType
 from typing import TYPE_CHECKING, Any, cast
 
 from statecharts import drive, ir
+from statecharts.addon import AddOnInstance
 from statecharts.engine import AxisInstance
 from statecharts.expr import Assignment
 
@@ -192,6 +193,7 @@ class System:
         ladder: Ladder | None = None,
         masters: Mapping[str, str] | None = None,
         motion: bool = True,
+        add_ons: Mapping[str, Mapping[str, object]] | None = None,
     ) -> None:
         if scan_ms <= 0 or coarse_update_ms <= 0:
             raise ValueError("scan_ms and coarse_update_ms must be positive")
@@ -206,12 +208,24 @@ class System:
         if ladder is not None:
             calls.extend((b.tag, b.mnemonic, b.axis) for b in ladder.bindings if b.axis in self.axes)
         masters = dict(masters or {})
+        #: the add-on instruction tags of the program (statecharts/addon.py)
+        self.add_ons: dict[str, AddOnInstance] = {}
+        #: the program in order: MOTION_INSTRUCTION tags and add-on instruction tags (the
+        #: tags of the calls an add-on instruction makes are in :attr:`tags` only)
+        self.program: list[TagInstance | AddOnInstance] = []
+        add_on_defs = {a.id: a for a in spec.add_ons}
         for tag, mnemonic, axis in calls:
+            if mnemonic in add_on_defs:
+                inst = AddOnInstance(tag, add_on_defs[mnemonic], self, (add_ons or {}).get(tag, {}))
+                self.add_ons[tag] = inst
+                self.program.append(inst)
+                continue
             ins = self.variant(mnemonic, axis)
             master = masters.get(tag)
             if ins.master_operand is not None and master not in self.axes:
                 raise ValueError(f"{tag}: {mnemonic} needs its {ins.master_operand} bound to an axis of the system")
             self.tags[tag] = TagInstance(tag, ins, spec.tag_type, axis, master)
+            self.program.append(self.tags[tag])
         #: run the drive model of :mod:`statecharts.drive` (the checker offers its events instead)
         self.motion = motion
         #: gearing slave axis -> its master axis, set when a MAG is accepted
@@ -258,17 +272,21 @@ class System:
         if self.ladder is not None:
             return self._advance_ladder(inputs)
         for name, rung in inputs.rungs.items():
-            self.tags[name].rung = rung
+            (self.add_ons.get(name) or self.tags[name]).rung = rung
         for name, ops in inputs.operands.items():
-            self.tags[name].operands.update(ops)
+            if name in self.add_ons:
+                self.add_ons[name].inputs.update(ops)
+            else:
+                self.tags[name].operands.update(ops)
         self.held_events.extend(inputs.events)
         coarse = False
-        if inputs.prescan:
-            for tag in self.tags.values():
-                self._row(tag, "prescan")
-        else:
-            for tag in self.tags.values():
-                self._row(tag, "rung_true" if tag.rung else "rung_false")
+        for entry in self.program:
+            condition = "prescan" if inputs.prescan else "rung_true" if entry.rung else "rung_false"
+            if isinstance(entry, AddOnInstance):
+                entry.scan(condition)
+            else:
+                self._row(entry, condition)
+        if not inputs.prescan:
             coarse = self.index % self.scans_per_update == 0
             if coarse:
                 self._coarse_update()
@@ -301,9 +319,10 @@ class System:
 
     def snapshot(self) -> tuple[object, ...]:
         """The whole state as nested tuples: (phase of the coarse-update clock, axes,
-        tags, request queue, held environment events), and with a ladder program the
-        values of its tag database last.  The scan counter itself is not state; only its
-        phase decides when the next coarse update comes."""
+        tags, request queue, held environment events), with a ladder program the
+        values of its tag database, and with add-on instruction tags their states last.
+        The scan counter itself is not state; only its phase decides when the next
+        coarse update comes."""
         snap: tuple[object, ...] = (
             self.index % self.scans_per_update,
             tuple(a.snapshot() for a in self.axes.values()),
@@ -313,6 +332,8 @@ class System:
         )
         if self.ladder is not None:
             snap += (self.ladder.db.snapshot(),)
+        if self.add_ons:
+            snap += (tuple(a.snapshot() for a in self.add_ons.values()),)
         return snap
 
     def restore(self, snap: tuple[object, ...]) -> None:
@@ -321,6 +342,9 @@ class System:
             "tuple[int, tuple[Any, ...], tuple[Any, ...], tuple[str, ...], tuple[tuple[str, str], ...]]", snap[:5])
         if self.ladder is not None:
             self.ladder.db.restore(cast("tuple[bool | int | float, ...]", snap[5]))
+        if self.add_ons:
+            for inst, a in zip(self.add_ons.values(), cast("tuple[Any, ...]", snap[-1])):
+                inst.restore(a)
         self.index = phase
         for axis, a in zip(self.axes.values(), axes):
             axis.restore(a)
@@ -495,6 +519,8 @@ class System:
         out: dict[str, Mapping[str, object]] = {}
         for name, tag in self.tags.items():
             out[name] = MappingProxyType(tag.observe())
+        for name, inst in self.add_ons.items():
+            out[name] = MappingProxyType(inst.observe())
         for name, axis in self.axes.items():
             out[name] = MappingProxyType(axis.observe())
         if self.ladder is not None:

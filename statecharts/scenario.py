@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from statecharts import expectations, ir
+from statecharts import addon, expectations, ir
 from statecharts.diagnostics import Diagnostic, ScenarioError, locate, node_path
 from statecharts.engine import AxisInstance
 from statecharts.expr import EvalError
@@ -37,6 +37,10 @@ class AxisSetup:
     chart: str
     state: str | None
     variables: tuple[tuple[str, object], ...]
+    #: instance parameters of the chart (a device handler's id and axes)
+    parameters: tuple[tuple[str, object], ...] = ()
+    #: events sent once the instance is set up (a device's mode selection)
+    events: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -214,8 +218,11 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     axes: list[AxisSetup] = []
     charts: dict[str, ir.Chart] = {}
     untyped: set[str] = set()  # axes of an unknown type: their uses are not errors of their own
-    for axis_name, a in setup["axes"].items():
-        p: tuple[str | int, ...] = ("setup", "axes", axis_name)
+    instances = [("axes", n, a) for n, a in setup["axes"].items()] + [("devices", n, d) for n, d in setup.get("devices", {}).items()]
+    for group, axis_name, a in instances:
+        p: tuple[str | int, ...] = ("setup", group, axis_name)
+        if group == "devices" and axis_name in setup["axes"]:
+            err(p, f"{axis_name!r} is both an axis and a device")
         try:
             chart = spec.chart_for_axis_type(a["type"])
         except KeyError:
@@ -253,17 +260,49 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             variables = {**_implied(chart, state), **variables}
         if "AxisType" in {v.name for v in chart.variables}:
             variables.setdefault("AxisType", a["type"])
-        axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items()))))
+        params = {cp.name: cp for cp in chart.parameters}
+        for pname, value in a.get("parameters", {}).items():
+            if pname not in params:
+                err((*p, "parameters", pname), f"chart {chart.id} has no parameter {pname!r}; parameters: {', '.join(params) or '(none)'}")
+            elif params[pname].type == "axis" and value not in setup["axes"]:
+                err((*p, "parameters", pname), f"{pname}: expected the name of an axis ({', '.join(setup['axes'])}), got {value!r}")
+            elif params[pname].type == "int" and (isinstance(value, bool) or not isinstance(value, int)):
+                err((*p, "parameters", pname), f"{pname}: expected an integer, got {value!r}")
+        given = {cp.name: cp.default for cp in chart.parameters if cp.default is not None}
+        given.update(a.get("parameters", {}))
+        env_events = [ev.name for ev in chart.events if ev.kind == "environment"]
+        for j, ev in enumerate(a.get("events", [])):
+            if ev not in env_events:
+                err((*p, "events", j), f"{ev!r} is not an environment event of {chart.id}; expected one of: {', '.join(env_events)}")
+        axes.append(AxisSetup(axis_name, a["type"], chart.id, state, tuple(sorted(variables.items())),
+                              tuple(sorted(given.items())), tuple(a.get("events", []))))
 
     if isinstance(setup.get("program"), (str, Mapping)):
         # a ladder program file: docs/programs.md
         return _load_ladder_scenario(path, tree, doc, spec, err, errors, axes)
     program: list[ProgramEntry] = []
     tag_ins: dict[str, ir.Instruction] = {}
+    add_on_defs = {a.id: a for a in spec.add_ons}
+    add_on_tags: dict[str, ir.AddOnInstruction] = {}
     for i, entry in enumerate(setup.get("program", [])):
         p = ("setup", "program", i)
-        if entry["tag"] in tag_ins:
+        if entry["tag"] in tag_ins or entry["tag"] in add_on_tags:
             err((*p, "tag"), f"tag {entry['tag']!r} is used twice; each instruction needs its own MOTION_INSTRUCTION tag")
+        if entry["instruction"] in add_on_defs:
+            ao = add_on_tags[entry["tag"]] = add_on_defs[entry["instruction"]]
+            for key in ("axis", "master"):
+                if key in entry:
+                    err((*p, key), f"{ao.id} takes its axes as operands (its InOut parameters), not `{key}:`")
+            ops = addon.check_operands(ao, entry.get("operands", {}), charts, (*p, "operands"), err)
+            for par in ao.parameters:
+                if par.usage == "InOut" and par.name not in ops:
+                    err((*p, "operands"), f"{ao.id} needs its InOut parameter {par.name}")
+            preset = addon.check_preset(ao, entry.get("preset", {}), (*p, "preset"), err)
+            program.append(ProgramEntry(entry["tag"], ao.id, "", tuple(sorted(ops.items())), tuple(preset.items())))
+            continue
+        if "axis" not in entry:
+            err(p, f"{entry['instruction']} needs `axis:`, the axis it acts on")
+            continue
         variants = spec.variants(entry["instruction"])
         if not variants:
             err((*p, "instruction"), f"unknown instruction {entry['instruction']!r}; expected one of: {', '.join(spec.mnemonics())}")
@@ -293,10 +332,13 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     for i, s in enumerate(doc["steps"]):
         p = ("steps", i)
         for tag in s.get("rungs", {}):
-            if tag not in tag_ins:
-                err((*p, "rungs", tag), f"unknown tag {tag!r}; program tags: {', '.join(tag_ins) or '(none)'}")
+            if tag not in tag_ins and tag not in add_on_tags:
+                err((*p, "rungs", tag), f"unknown tag {tag!r}; program tags: {', '.join([*tag_ins, *add_on_tags]) or '(none)'}")
         operands: dict[str, Mapping[str, object]] = {}
         for tag, ops in s.get("operands", {}).items():
+            if tag in add_on_tags:
+                operands[tag] = addon.check_operands(add_on_tags[tag], ops, charts, (*p, "operands", tag), err)
+                continue
             if tag not in tag_ins:
                 err((*p, "operands", tag), f"unknown tag {tag!r}")
                 continue
@@ -321,6 +363,15 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
             if not isinstance(fields, Mapping):
                 err((*p, "expect", target), (f"expected a mapping of observables for {target!r}; a tag path with a "
                                              f"value needs a ladder program (setup.program naming a program file)"))
+                continue
+            if target in add_on_tags:
+                ao = add_on_tags[target]
+                for fname, value in fields.items():
+                    problem = addon.observable_problem(ao, fname, value)
+                    if problem:
+                        err((*p, "expect", target, fname), f"{target}.{fname}: {problem}")
+                    else:
+                        expect.append((target, fname, value))
                 continue
             if target in tag_ins:
                 allowed = [m.name for m in spec.tag_type.members] + ["FLAGS"]
@@ -502,14 +553,23 @@ def _operands(ins: ir.Instruction, given: Mapping[str, object], parts: tuple[Any
 
 def build_system(scenario: Scenario, spec: ir.Spec) -> System:
     params = {"scan_ms": scenario.scan_ms, "coarse_update_ms": scenario.coarse_update_ms}
-    axes = [
-        AxisInstance(spec.chart(a.chart), a.name, state=a.state, variables=dict(a.variables), parameters=params)
-        for a in scenario.axes
-    ]
+    axes = []
+    for a in scenario.axes:
+        axis = AxisInstance(spec.chart(a.chart), a.name, state=a.state, variables=dict(a.variables),
+                            parameters={**params, **dict(a.parameters)})
+        for event in a.events:
+            axis.apply_event_actions(event)
+            axis.send(event)
+        axes.append(axis)
+    add_ons = {a.id for a in spec.add_ons}
     system = System(spec, axes, [(p.tag, p.instruction, p.axis) for p in scenario.program],
                     scan_ms=scenario.scan_ms, coarse_update_ms=scenario.coarse_update_ms,
-                    masters={p.tag: p.master for p in scenario.program if p.master is not None})
+                    masters={p.tag: p.master for p in scenario.program if p.master is not None},
+                    add_ons={p.tag: dict(p.operands) for p in scenario.program if p.instruction in add_ons})
     for p in scenario.program:
+        if p.tag in system.add_ons:
+            system.add_ons[p.tag].preset(dict(p.preset))
+            continue
         system.tags[p.tag].operands.update(dict(p.operands))
         system.tags[p.tag].values.update(dict(p.preset))
     return system

@@ -15,7 +15,8 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from hypothesis import given
+from conftest import examples
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from checker.aoi_check import bundled_aoi_systems
@@ -91,6 +92,7 @@ def test_every_bundled_system_is_explored() -> None:
 
 
 @pytest.mark.parametrize("name", SYSTEMS)
+@settings(max_examples=examples(40))  # make deep: the deep profile's count, and the long runs below
 @given(data=st.data())
 def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
     _engine_run_is_a_checker_path(models[name], data, max_scans=25)

@@ -418,8 +418,10 @@ SCENARIO_SCHEMA = json.loads((bundled_spec_dir() / "schema" / "scenario.schema.j
 LOADER_KEYS = {
     "": {"format", "name", "description", "sources", "covers", "setup", "steps"},
     # tags and prescan: set-up of a ladder program (statecharts/program/scenario.py)
-    "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "program", "tags", "prescan"},
+    "/properties/setup": {"scan_ms", "coarse_update_ms", "axes", "devices", "program", "tags", "prescan"},
     "/properties/setup/properties/axes/additionalProperties": {"type", "chart", "state", "variables"},
+    "/properties/setup/properties/devices/additionalProperties": {"type", "chart", "state", "variables", "parameters",
+                                                                  "events"},
     "/properties/setup/properties/program/oneOf/0/items": {"tag", "instruction", "axis", "master", "operands", "preset"},
     # tags and always: steps of a scenario with a ladder program
     "/properties/steps/items": {"name", "prescan", "scans", "within", "rungs", "operands", "events", "expect", "set",

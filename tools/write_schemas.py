@@ -361,16 +361,31 @@ scenario = {
                                  "state": {"type": "string"},
                                  "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                              }}},
+                "devices": {"type": "object", "propertyNames": NAME_KEY,
+                            "description": "Chart instances that are not axes (a device handler), by name.",
+                            "additionalProperties": {
+                                "type": "object", "additionalProperties": False, "required": ["type"],
+                                "properties": {
+                                    "type": {"type": "string", "description": "The data type the device's chart models."},
+                                    "chart": ID,
+                                    "state": {"type": "string"},
+                                    "variables": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
+                                    "parameters": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]},
+                                                   "description": "Instance parameters of the chart (a handler's id and axes)."},
+                                    "events": {"type": "array", "items": NAME_KEY,
+                                               "description": "Environment events sent once the device is set up."},
+                                }}},
                 "program": {"oneOf": [
                     {"type": "array", "items": {
                         "type": "object", "additionalProperties": False,
-                        "required": ["tag", "instruction", "axis"],
+                        "required": ["tag", "instruction"],
                         "properties": {
                             "tag": NAME_KEY, "instruction": NAME_KEY, "axis": NAME_KEY,
                             "master": {**NAME_KEY, "description": "The axis of the instruction's master axis operand (MAG's Master Axis)."},
                             "operands": {"type": "object", "additionalProperties": {"type": ["boolean", "integer", "number", "string"]}},
                             "preset": {"type": "object", "additionalProperties": {"type": ["boolean", "integer"]},
-                                       "description": "MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR) set before the first scan."},
+                                       "description": ("MOTION_INSTRUCTION members (EN, DN, ER, PC, IP, ERR, EXERR), or an add-on "
+                                                       "instruction's status members and local tags, set before the first scan.")},
                         }}},
                     PROGRAM_FILE,
                     {"type": "object", "additionalProperties": False, "required": ["file"],

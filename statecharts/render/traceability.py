@@ -141,8 +141,13 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str],
             problems.append(ScenarioProblem(shown, f"crashed: {type(exc).__name__}: {exc}"))
             continue
         charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
-        instr = {p.tag: p.instruction for p in scenario.program}
+        add_ons = {a.id for a in spec.add_ons}
+        instr = {p.tag: p.instruction for p in scenario.program if p.instruction not in add_ons}
         instances: set[str] = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
+        instances |= {p.tag for p in scenario.program if p.instruction in add_ons}
+        if result.rows:  # the MOTION_INSTRUCTION tags of an instance's calls: ``Sync.MAM``
+            instr.update({obj: obj.split(".", 1)[1].split("_")[0] for obj in result.rows[0].record.observations
+                          if "." in obj and obj.split(".", 1)[0] in instances})
         states: set[tuple[str, str]] = set()
         errors: set[tuple[str, int, int]] = set()
         done: set[str] = set()

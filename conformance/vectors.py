@@ -77,6 +77,8 @@ DEFAULT_SYSTEMS, NOT_DRIVEN = suite_plan()
 AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
 AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
                 "which runs on a separate world of its own; vectors carry the main scenario format only")
+ADDON_LEFT_OUT = ("calls an add-on instruction or sets up a device (docs/aoi.md); version 1 of the vector format "
+                  "carries programs of motion instruction calls on axes only")
 LADDER_LEFT_OUT = ("runs a ladder program file (docs/programs.md); version 1 of the vector format carries "
                    "programs of motion instruction calls only")
 
@@ -249,6 +251,11 @@ def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
         setup_node = tree.get("setup") if isinstance(tree, Mapping) else None
         if isinstance(setup_node, Mapping) and isinstance(setup_node.get("program"), (str, Mapping)):
             suite.left_out.append({"file": rel, "reason": LADDER_LEFT_OUT})
+            continue
+        add_ons = {a.id for a in spec.add_ons}
+        if isinstance(setup_node, Mapping) and (setup_node.get("devices") or any(
+                isinstance(p, Mapping) and p.get("instruction") in add_ons for p in setup_node.get("program") or ())):
+            suite.left_out.append({"file": rel, "reason": ADDON_LEFT_OUT})
             continue
         scenario = load_scenario(f, spec)
         result = run_scenario(scenario, spec)

@@ -101,6 +101,7 @@ def test_every_engine_run_of_an_add_on_system_is_a_path_of_the_checker(spec: ir.
 
 
 @pytest.mark.parametrize("name", SYSTEMS)
+@settings(max_examples=examples(40))  # make deep: the deep profile's count, and the long runs below
 @given(data=st.data())
 def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
     _engine_run_is_a_checker_path(models[name], data, max_scans=25)

@@ -59,7 +59,7 @@ def bundled_report() -> dict[str, object]:
 def test_bundled_aoi_system_is_complete_and_every_property_holds(bundled_report: dict[str, object]) -> None:
     assert bundled_report["_exit"] == 0
     assert bundled_report["complete"] is True
-    props = {p["name"]: p for p in bundled_report["properties"]}  # type: ignore[union-attr]
+    props = {p["name"]: p for p in bundled_report["properties"]}
     mine = {n: p for n, p in props.items() if n.startswith("aoi_")}
     assert len(mine) >= 14
     assert all(p["holds"] is True for p in props.values()), [n for n, p in props.items() if p["holds"] is not True]
@@ -69,7 +69,7 @@ def test_bundled_aoi_system_is_complete_and_every_property_holds(bundled_report:
 
 
 def test_bundled_aoi_system_produces_every_documented_code(bundled_report: dict[str, object]) -> None:
-    errors = bundled_report["coverage"]["error_codes"]  # type: ignore[index]
+    errors = bundled_report["coverage"]["error_codes"]
     reached = {int(item.split(":")[1]) for item in errors["reached"] if item.startswith(AOI + ":")}
     assert reached == set(DOCUMENTED_CODES)
     assert not [i for i in errors["unreached"] if i.startswith(AOI + ":")]
@@ -107,8 +107,8 @@ def test_a_false_rung_that_keeps_sts_ip_is_found_and_replays(tmp_path: Path, cap
     assert set(bad) == {"aoi_in_process_only_while_enabled"}
     ce = bad["aoi_in_process_only_while_enabled"]["counterexample"]
     # shortest: the rung goes true (the move starts: Sts_IP), then false (Sts_IP stays)
-    assert ce["steps"] == ["Sync rung up", "Sync rung down"]  # type: ignore[index]
-    path = Path(ce["scenario"])  # type: ignore[index]
+    assert ce["steps"] == ["Sync rung up", "Sync rung down"]
+    path = Path(ce["scenario"])
     mutated = load_spec([spec_dir])
     assert run_scenario(load_scenario(path, mutated), mutated).passed
     bundled = load_spec()
@@ -129,7 +129,7 @@ def test_an_undocumented_code_is_found(tmp_path: Path, capsys: pytest.CaptureFix
     assert "aoi_documented_codes_only" in bad
     # by hand: Set_Speed becomes -1 while the rung is false and the rung goes true in the same scan;
     # every check before the speed check passes in the set-up (003 §1.3.2 row order)
-    assert bad["aoi_documented_codes_only"]["counterexample"]["steps"] == ["Sync rung up (Set_Speed=-1.0)"]  # type: ignore[index]
+    assert bad["aoi_documented_codes_only"]["counterexample"]["steps"] == ["Sync rung up (Set_Speed=-1.0)"]
 
 
 BAD_SYSTEM = """\

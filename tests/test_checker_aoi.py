@@ -171,6 +171,9 @@ def test_options_that_do_not_apply_are_refused(capsys: pytest.CaptureFixture[str
     assert code == 2 and "--max-changes" in err
     code, _, err = _check(["--system", "aoi", "--engine", "spin"], capsys)
     assert code == 2 and "--engine spin" in err
+    from checker.cli import main
+    assert main(["export", "--system", "aoi"]) == 2
+    assert "add-on instruction tags" in capsys.readouterr().err
 
 
 def test_no_change_at_all_still_completes_a_recovery(capsys: pytest.CaptureFixture[str]) -> None:

@@ -460,6 +460,12 @@ def explore(
     least depth.  With ``witnesses`` the coverage records, for every item, a step of
     least depth that covered it (:attr:`Coverage.first`; :func:`witness_run` gives the
     run to it)."""
+    if model.add_ons or model.max_changes is not None:
+        # the compiled core's blocks are axes and their tags; an add-on instruction reads and
+        # drives several of them in one scan, so its systems are searched on the interpreter
+        return explore_interpreted(model, max_states=max_states, max_seconds=max_seconds, keep_graph=keep_graph,
+                                   progress=progress, on_progress=on_progress, stop_on_violation=stop_on_violation,
+                                   witnesses=witnesses)
     start = time.perf_counter()
     # the search allocates millions of small acyclic objects (tuples, bytes) and keeps
     # most of them: the cyclic collector would walk the growing heap again and again

@@ -10,6 +10,7 @@ was incomplete (state or time limit) and nothing was violated.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from collections.abc import Iterable
@@ -55,8 +56,9 @@ def register(subparsers: argparse._SubParsersAction[Any]) -> argparse.ArgumentPa
                    help=f"a bundled system name or a system file (default: {DEFAULT_SYSTEM}; --list-systems lists them)")
     p.add_argument("--list-systems", action="store_true", help="list the bundled systems and exit")
     p.add_argument("--axes", type=_axis_count, metavar="N", help="use N axes in every axis group of the system")
-    p.add_argument("--max-changes", type=positive_int, metavar="N",
-                   help="add-on instruction systems: allow N input/environment changes per run (default: the system's)")
+    p.add_argument("--max-changes", type=_non_negative_int, metavar="N",
+                   help="systems that count their changes (add-on instruction systems): allow N environment events "
+                        "and input changes per run (default: the system's)")
     p.add_argument("--max-states", type=positive_int, metavar="N", help="stop (incomplete) after N states")
     p.add_argument("--max-seconds", type=_positive_float, metavar="S", help="stop (incomplete) after S seconds")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -116,9 +118,8 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
             if problem is not None:
                 print(f"motionchart check: {problem}: {shown_name(p)!r}", file=sys.stderr)
                 return EXIT_USAGE
-    from checker.aoi_check import bundled_aoi_systems
     from checker.program_check import bundled_program_systems, is_program_system
-    systems = {**bundled_systems(), **bundled_aoi_systems(), **bundled_program_systems()}
+    systems = {**bundled_systems(), **bundled_program_systems()}
     program_only = ("axes", "graphml", "properties", "max_changes")
     if getattr(args, "program", None):
         from checker import program_check
@@ -166,27 +167,19 @@ def run(args: argparse.Namespace, out: TextIO) -> int:
             print(f"motionchart check: --{opt.replace('_', '-')} applies to program systems only, "
                   f"not {args.system!r}", file=sys.stderr)
             return EXIT_USAGE
-    from checker.aoi_check import is_aoi_system
-    if is_aoi_system(system_path) and args.engine == "spin":
-        print(f"motionchart check: --engine spin does not apply to the add-on instruction system {args.system!r}",
-              file=sys.stderr)
-        return EXIT_USAGE
-    if is_aoi_system(system_path):
-        from checker import aoi_check
-        unsupported = [f"--{o.replace('_', '-')}" for o in ("axes", "graphml", "properties")
-                       if getattr(args, o, None)] + (["--no-symmetry"] if args.no_symmetry else [])
-        if unsupported:
-            print(f"motionchart check: {', '.join(unsupported)} do(es) not apply to the add-on instruction "
-                  f"system {args.system!r}", file=sys.stderr)
-            return EXIT_USAGE
-        return aoi_check.run(system_path, args, out)
-    if args.max_changes is not None:
-        print(f"motionchart check: --max-changes applies to add-on instruction systems only, not {args.system!r}",
-              file=sys.stderr)
-        return EXIT_USAGE
     try:
         spec = load_spec(args.spec)
         sysdef = load_system(system_path, spec)
+        if args.max_changes is not None:
+            if not sysdef.add_ons and sysdef.max_changes is None:
+                print(f"motionchart check: --max-changes applies to systems that count their changes (max_changes:, "
+                      f"add-on instruction systems), not {args.system!r}", file=sys.stderr)
+                return EXIT_USAGE
+            sysdef = dataclasses.replace(sysdef, max_changes=args.max_changes)
+        if sysdef.add_ons and (args.engine == "spin" or args.axes is not None):
+            print(f"motionchart check: {'--engine spin' if args.engine == 'spin' else '--axes'} does not apply to the "
+                  f"add-on instruction system {args.system!r}", file=sys.stderr)
+            return EXIT_USAGE
         if args.axes is not None:
             sysdef = sysdef.scaled(args.axes)
         props = load_properties(spec, args.properties)

@@ -54,7 +54,9 @@ slave's tables are swapped for the master core's before its block is stepped,
 :meth:`CompiledModel._bind_master`), and a choice on either block still changes that
 block only.  Otherwise (a master listed before its slave, a slave with two masters,
 interchangeable axes, a completion condition that reads the master and so sees it after
-the whole update) the successors are computed as the interpreter back-end computes them
+the whole update), and in a system with add-on instruction tags (an instance reads and
+drives several axes and devices in one scan; its part and the changes left follow the
+axis blocks in the state) the successors are computed as the interpreter back-end computes them
 (:meth:`CompiledModel._coupled_successors`: decode, load, scan each enabled choice,
 encode); the states are still numbered, stored and searched by the core, and coverage
 is credited the same way.
@@ -161,6 +163,10 @@ class CompiledModel:
         self.cores = Intern()  # concrete axis cores: FastAxis snapshots
         self.parts = Intern()  # abstract axis parts, as Model.extract writes them
         self.tags = Intern()  # tag parts (values, rung, operands, monitors)
+        #: the parts after the axis blocks (add-on instruction tags, the changes left), interned
+        self.extra = Intern()
+        self.axis_end = model.block_start[-1] + model.block_len[-1] if model.block_start else 1
+        self.nextra = self.width - self.axis_end
         self.cov = CoreCoverage()
         #: number of the state being expanded (set by the search; coverage witnesses)
         self.current = -1
@@ -290,12 +296,13 @@ class CompiledModel:
         # a state is the phase then the sorted axis parts (_flat_successors)
         groups = self.symmetric_groups
         self._flat = (not self.has_prescan and len(groups) == 1 and len(groups[0]) == self.naxes > 1
-                      and all(n == 1 for n in self.block_len))
-        #: a call reads another axis than its own (a bound master axis)
-        self.coupled = bool(model.masters)
+                      and all(n == 1 for n in self.block_len) and not self.nextra)
+        #: a call reads another axis than its own (a bound master axis), or an add-on
+        #: instruction tag drives several axes and devices in one scan
+        self.coupled = bool(model.masters) or bool(self.nextra)
         #: slave axis -> its master axis, when the slave's pieces can be memoised per
         #: master core (_bind_master); None: successors come from the interpreter
-        self._couple: dict[int, int] | None = self._couplings() if self.coupled else {}
+        self._couple: dict[int, int] | None = None if self.nextra else self._couplings() if self.coupled else {}
         self._bound: dict[int, int] = {}  # slave axis -> master core its tables are for
         self._bundles: dict[tuple[int, int], tuple[list[dict[Any, Any]], list[dict[Any, Any]]]] = {}
 
@@ -336,6 +343,8 @@ class CompiledModel:
             out.append(self.part_id(ai, flat[start]))
             for k in range(1, self.block_len[ai]):
                 out.append(self.tag_id(flat[start + k]))
+        if self.nextra:
+            out.extend(self.extra.id(x) for x in flat[self.axis_end:])
         return self.canonical(out)
 
     def decode(self, state: Sequence[int]) -> Flat:
@@ -346,6 +355,8 @@ class CompiledModel:
             out.append(self.parts.values[state[start]])
             for k in range(1, self.block_len[ai]):
                 out.append(self.tags.values[state[start + k]])
+        if self.nextra:
+            out.extend(self.extra.values[i] for i in state[self.axis_end:])
         return tuple(out)
 
     def _alphabet(self, ai: int) -> list[int]:

@@ -72,18 +72,21 @@ def replay(result: SearchResult, prop: str, witness: Witness | None, *, end_stat
     system = model.system
     concrete = system.snapshot()
     monitors = list(model.monitor_values)
+    budget = model.budget
     before = _plain(system.observe())
     initial = before
     steps: list[TraceStep] = []
 
     def try_choices(accept: Callable[[tuple[object, ...], list[Property], list[Property]], bool]) -> bool:
-        nonlocal concrete, monitors, before
+        nonlocal concrete, monitors, before, budget
         system.restore(concrete)
         model.monitor_values = list(monitors)
+        model.budget = budget
         options = model.enabled()
         for c in options:
             system.restore(concrete)
             model.monitor_values = list(monitors)
+            model.budget = budget
             index_before = system.index
             flat, bad, good, _facts = model.step(c)
             if accept(flat, bad, good):
@@ -95,6 +98,7 @@ def replay(result: SearchResult, prop: str, witness: Witness | None, *, end_stat
                 before = obs
                 concrete = system.snapshot()
                 monitors = list(model.monitor_values)
+                budget = model.budget
                 return True
         return False
 
@@ -145,19 +149,40 @@ def scenario_text(result: SearchResult, trace: Trace, prop: Property | None) -> 
     if prop is not None:
         lines.append(f"sources: [{_y(prop.source)}]")
     lines.append(f"covers: [{_y('property.' + trace.prop)}]")
-    lines += ["setup:", f"  scan_ms: {sd.scan_ms}", f"  coarse_update_ms: {sd.coarse_update_ms}", "  axes:"]
-    for (name, g), ci in zip(model.axis_defs, trace.assignment):
-        variables = dict(g.variables)
-        variables.update(dict(g.configurations[ci].variables))
-        entry: dict[str, object] = {"type": g.axis_type}
-        if g.state is not None:
-            entry["state"] = g.state
-        if variables:
-            entry["variables"] = dict(sorted(variables.items()))
-        lines.append(f"    {name}: {_y(entry)}  # configuration {g.configurations[ci].name}")
+    lines += ["setup:", f"  scan_ms: {sd.scan_ms}", f"  coarse_update_ms: {sd.coarse_update_ms}"]
+    for section, devices in (("axes", False), ("devices", True)):
+        chosen = [(name, g, ci) for (name, g), ci in zip(model.axis_defs, trace.assignment) if g.device is devices]
+        if not chosen:
+            continue
+        lines.append(f"  {section}:")
+        for name, g, ci in chosen:
+            variables = dict(g.variables)
+            variables.update(dict(g.configurations[ci].variables))
+            entry: dict[str, object] = {"type": g.axis_type}
+            if g.chart != model.spec.chart_for_axis_type(g.axis_type).id:
+                entry["chart"] = g.chart
+            if g.state is not None:
+                entry["state"] = g.state
+            if variables:
+                entry["variables"] = dict(sorted(variables.items()))
+            parameters = {**dict(g.parameters), **dict(g.configurations[ci].parameters)}
+            if parameters:
+                entry["parameters"] = dict(sorted(parameters.items()))
+            if g.events:
+                entry["events"] = list(g.events)
+            lines.append(f"    {name}: {_y(entry)}  # configuration {g.configurations[ci].name}")
     lines.append("  program:")
+    add_ons = {e.tag: e for e in sd.add_ons}
     for tag, mnemonic, axis in model.program:
+        if tag in add_ons:
+            e = add_ons[tag]
+            item: dict[str, object] = {"tag": tag, "instruction": mnemonic, "operands": dict(e.operands)}
+            if e.preset:
+                item["preset"] = dict(e.preset)
+            lines.append(f"    - {_y(item)}")
+            continue
         lines.append(f"    - {_y({'tag': tag, 'instruction': mnemonic, 'axis': axis})}")
+    internal = {s.tag.name for s in model.slots if s.internal}
     lines.append("steps:")
     if not trace.steps:
         lines += ["  - name: the initial state already shows it", "    scans: 1"]
@@ -170,6 +195,8 @@ def scenario_text(result: SearchResult, trace: Trace, prop: Property | None) -> 
                 lines.append(f"    operands: {_y({c.tag: dict(c.operands)})}")
         elif c.kind == "drop":
             lines.append(f"    rungs: {_y({c.tag: False})}")
+        elif c.kind == "input":
+            lines.append(f"    operands: {_y({c.tag: dict(c.operands)})}")
         if c.kind == "event" or c.drive:
             events = [{"axis": e.axis, "event": e.event} for e in c.inputs.events]
             lines.append(f"    events: [{', '.join(_y(e) for e in events)}]")
@@ -177,7 +204,9 @@ def scenario_text(result: SearchResult, trace: Trace, prop: Property | None) -> 
             lines.append("    prescan: true")
         lines.append("    expect:")
         for obj, fields in st.observations.items():
-            lines.append(f"      {obj}: {_y(fields)}")
+            if obj not in internal:  # the calls of an add-on instruction are its own, not the program's tags
+                # a chart state without a number (a device's) has no state attribute value to expect
+                lines.append(f"      {obj}: {_y({k: v for k, v in fields.items() if v is not None})}")
     return "\n".join(lines) + "\n"
 
 

@@ -40,8 +40,10 @@ def _instructions(model: Model, whole_spec: bool = False) -> list[ir.Instruction
     if whole_spec:
         return list(model.spec.instructions)
     seen: dict[str, ir.Instruction] = {}
+    add_ons = {a.id for a in model.spec.add_ons}
     for _tag, mnemonic, _axis in model.program:
-        seen.setdefault(mnemonic, model.spec.instruction(mnemonic))
+        if mnemonic not in add_ons:
+            seen.setdefault(mnemonic, model.spec.instruction(mnemonic))
     return list(seen.values())
 
 
@@ -55,6 +57,9 @@ def universe(model: Model, what: str, variable: str | None = None, *, whole_spec
         return [f"{c.id}:{t.id}" for c in charts for t in c.transitions]
     if what == "error_codes":
         out: list[str] = []
+        add_ons = {a.id: a for a in spec.add_ons}
+        for ao in (spec.add_ons if whole_spec else [add_ons[m] for _t, m, _a in model.program if m in add_ons]):
+            out += [error_item(ao.id, e.code, 0) for e in ao.errors if error_item(ao.id, e.code, 0) not in out]
         for ins in _instructions(model, whole_spec):
             items = [error_item(ins.id, c.err, c.exerr) for c in (*ins.checks, *ins.aborts)]
             items += [error_item(x.instruction, x.err, x.exerr) for x in spec.extended_errors if x.instruction == ins.id]

@@ -59,7 +59,7 @@ class Choice:
     """One input change for one scan (the most general program's alphabet)."""
 
     index: int
-    kind: str  # "raise" | "drop" | "event" | "prescan" | "nothing"
+    kind: str  # "raise" | "drop" | "event" | "prescan" | "nothing" | "input" (an add-on input, rung down)
     tag: str | None
     axis: str | None
     event: str | None
@@ -78,6 +78,8 @@ class Choice:
             text = f"{self.tag} rung down"
         elif self.kind == "event":
             text = f"{self.event} on {self.axis}"
+        elif self.kind == "input":
+            text = ", ".join(f"{self.tag}.{k} = {v!r}" for k, v in self.operands)
         else:
             text = "prescan" if self.kind == "prescan" else "scan"
         return text + (f" + {self.drive}" if self.drive else "")
@@ -262,6 +264,7 @@ class _TagSlot:
         "fields",
         "initial",
         "ins",
+        "internal",
         "inv",
         "local",
         "monitors",
@@ -290,6 +293,8 @@ class _TagSlot:
         self.monitors: tuple[Property, ...] = ()
         self.inv: tuple[Property, ...] = ()
         self.reach: tuple[Property, ...] = ()
+        #: a call an add-on instruction makes (its tag is no input of the program and is kept exactly)
+        self.internal = False
 
 
 class Model:
@@ -319,9 +324,14 @@ class Model:
         # AxisInstance or the back end's axes (FastAxis), used through their common interface
         self.axes: list[Any] = list(self.system.axes.values())
         self.charts = {g.chart: spec.chart(g.chart) for _a, g in self.axis_defs}
+        #: per axis: the chart parameters its configurations choose (kept in the state after its variables)
+        self.param_names: list[tuple[str, ...]] = [
+            tuple(sorted({k for c in g.configurations for k, _v in c.parameters})) for _a, g in self.axis_defs]
         # a property tied to a chart the system has no axis of does not apply to it
+        ao_ids = {a.add_on.id for a in getattr(self.system, "add_ons", {}).values()}
         self.properties = tuple(p for p in self.properties if (p.chart is None or p.chart in self.charts)
-                                and (not p.systems or sysdef.name in p.systems))
+                                and (not p.systems or sysdef.name in p.systems)
+                                and (p.scope != "add_on" or (p.instruction or "") in ao_ids | ({""} if ao_ids else set())))
         self.notes: list[str] = []
 
         # cone of influence and the collapse abstraction
@@ -350,6 +360,9 @@ class Model:
 
         # retirement of idle tags, verified per instruction
         retire_ok: dict[str, bool] = {}
+        #: the add-on instruction tags of the program (statecharts/addon.py) and the tags of their calls
+        self.add_ons: list[Any] = list(getattr(self.system, "add_ons", {}).values())
+        program_tags = {t for t, _m, _a in self.program}
         called = {m for _t, m, _a in self.program}
         for ins in spec.instructions:
             if ins.id not in called:  # no tag of it: nothing to retire
@@ -375,7 +388,8 @@ class Model:
             s.initial = tuple(tag.values.values())
             s.op_names = tuple(tag.operands)
             s.default_ops = tuple(tag.operands.values())
-            s.retire = retire_ok[tag.instruction.id]
+            s.internal = tag.name not in program_tags
+            s.retire = retire_ok.get(tag.instruction.id, False) and not s.internal
             row = tag.instruction.table.row("rung_true")
             s.rise_guard = row.guard.fn if row is not None and row.guard is not None else None
             chart = self.charts[self.axis_defs[s.axis_index][1].chart]
@@ -387,6 +401,13 @@ class Model:
             self.slots.append(s)
         self.queue_local = {tag.name: self.slots[ti].local for ti, tag in enumerate(self.tags)}
         self.tag_axis = {tag.name: self.slots[ti].axis_index for ti, tag in enumerate(self.tags)}
+        ao_props = [p for p in self.properties if p.scope == "add_on"]
+        #: per add-on instruction tag: its invariants and goals
+        self.add_on_props: list[tuple[tuple[Property, ...], tuple[Property, ...]]] = []
+        for inst in self.add_ons:
+            mine = [p for p in ao_props if p.instruction in (None, inst.add_on.id)]
+            self.add_on_props.append((tuple(p for p in mine if p.kind == "invariant"),
+                                      tuple(p for p in mine if p.kind == "reachable")))
         self.axis_props: list[tuple[tuple[Property, ...], tuple[Property, ...]]] = []
         for _name, g in self.axis_defs:
             chart = self.charts[g.chart]
@@ -418,7 +439,11 @@ class Model:
         self.choices: list[Choice] = []
         self.raise_choices: list[list[Choice]] = []
         self.drop_choice: list[Choice] = []
-        for tag in self.tags:
+        for tag, s in zip(self.tags, self.slots):
+            if s.internal:  # rows run by its add-on instruction, never by a rung of the program
+                self.raise_choices.append([])
+                self.drop_choice.append(self._choice("drop", tag=tag.name, inputs=ScanInputs()))
+                continue
             raises = []
             for ops in operand_choices(sysdef, tag.instruction):
                 raises.append(self._choice("raise", tag=tag.name, operands=tuple(ops.items()),
@@ -429,9 +454,10 @@ class Model:
         for name, g in self.axis_defs:
             chart = self.charts[g.chart]
             # drive events (a move reaching its target...) are free inputs: the motion abstraction
-            offered = {e.name for e in chart.events if e.kind in ("environment", "drive")}
-            events = sysdef.environment if sysdef.environment is not None else tuple(
-                e.name for e in chart.events if e.kind in ("environment", "drive"))
+            kinds = ("environment",) if sysdef.motion else ("environment", "drive")
+            offered = {e.name for e in chart.events if e.kind in kinds}
+            events = g.environment if g.environment is not None else sysdef.environment if \
+                sysdef.environment is not None else tuple(e.name for e in chart.events if e.kind in ("environment", "drive"))
             for ev in events:
                 if ev in offered:
                     self.event_choices.append(self._choice(
@@ -446,8 +472,9 @@ class Model:
             if any(e.name == c.event and e.kind == "drive" for e in chart.events):
                 drive_of.setdefault(c.axis, []).append(str(c.event))
         bases: list[tuple[str, Choice]] = []
-        for tag, raises, drop in zip(self.tags, self.raise_choices, self.drop_choice):
-            bases.extend((tag.axis, c) for c in (*raises, drop))
+        for tag, raises, drop, s in zip(self.tags, self.raise_choices, self.drop_choice, self.slots):
+            if not s.internal:
+                bases.extend((tag.axis, c) for c in (*raises, drop))
         bases.extend((str(c.axis), c) for c in self.event_choices if c.event not in drive_of.get(str(c.axis), ()))
         for axis, base in bases:
             for d in drive_of.get(axis, ()):
@@ -461,6 +488,30 @@ class Model:
         self.prescan = self._choice("prescan", inputs=ScanInputs(prescan=True)) if sysdef.prescan else None
         self.nothing = self._choice("nothing", inputs=ScanInputs())
         self.fixed_choices.append(self.nothing)
+        # the add-on instruction tags: their rung up or down, and (while it is down) one input changed
+        self.add_on_raise: list[Choice] = []
+        self.add_on_drop: list[Choice] = []
+        self.add_on_inputs: list[list[Choice]] = []
+        entries = {e.tag: e for e in sysdef.add_ons}
+        for inst in self.add_ons:
+            self.add_on_raise.append(self._choice("raise", tag=inst.name, inputs=ScanInputs(rungs={inst.name: True})))
+            self.add_on_drop.append(self._choice("drop", tag=inst.name, inputs=ScanInputs(rungs={inst.name: False})))
+            # an input written while the rung is down, with the rung staying down or going up in the same scan
+            changes = []
+            for name, values in entries[inst.name].inputs:
+                for v in values:
+                    for up in (False, True):
+                        rungs = {inst.name: True} if up else {}
+                        changes.append(self._choice("raise" if up else "input", tag=inst.name, operands=((name, v),),
+                                                    inputs=ScanInputs(rungs=rungs, operands={inst.name: {name: v}})))
+            self.add_on_inputs.append(changes)
+        #: environment events and input changes still allowed in the run (None: unbounded)
+        self.max_changes = sysdef.max_changes
+        self.budget = self.max_changes
+        self.counted = {c.index for c in self.event_choices if self._is_environment(c)}
+        self.counted |= {c.index for cs in self.add_on_inputs for c in cs}
+        # layout, continued: one part per add-on instruction tag, then the changes left
+        self.width += len(self.add_ons) + (self.max_changes is not None)
 
         # run-time buffers and memo tables
         self.monitor_values: list[tuple[int, ...]] = [tuple(0 for _ in s.monitors) for s in self.slots]
@@ -470,8 +521,13 @@ class Model:
             axis.fired = f
         self._axis_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...]]] = {}
         self._tag_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...], tuple[int, ...], tuple[bool, ...]]] = {}
+        self._add_on_memo: dict[tuple[object, ...], tuple[tuple[bool, ...], tuple[bool, ...]]] = {}
 
     # -- construction helpers ----------------------------------------------------
+
+    def _is_environment(self, c: Choice) -> bool:
+        chart = self.charts[dict(self.axis_defs)[str(c.axis)].chart]
+        return any(e.name == c.event and e.kind == "environment" for e in chart.events)
 
     def _choice(self, kind: str, *, tag: str | None = None, axis: str | None = None, event: str | None = None,
                 operands: tuple[tuple[str, object], ...] = (), inputs: ScanInputs, drive: str | None = None) -> Choice:
@@ -493,11 +549,24 @@ class Model:
         for (name, g), ci in zip(self.axis_defs, assignment):
             variables = dict(g.variables)
             variables.update(dict(g.configurations[ci].variables))
-            axes.append(make(self.spec.chart(g.chart), name, state=g.state, variables=variables,
-                             parameters=self.params))
+            parameters = {**self.params, **dict(g.parameters), **dict(g.configurations[ci].parameters)}
+            state = g.configurations[ci].state or g.state
+            axis: Any = make(self.spec.chart(g.chart), name, state=state, variables=variables,
+                             parameters=parameters)
+            for event in g.events:  # a device's set-up events (its mode selection)
+                axis.apply_event_actions(event)
+                axis.send(event)
+            axes.append(axis)
         # motion=False: the drive model's arithmetic is abstracted away (its events are inputs)
-        return System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
-                      coarse_update_ms=self.sysdef.coarse_update_ms, masters=self.masters, motion=False)
+        extra: dict[str, Any] = {}
+        if self.sysdef.add_ons:
+            extra["add_ons"] = {e.tag: dict(e.operands) for e in self.sysdef.add_ons}
+        system = System(self.spec, axes, self.program, scan_ms=self.sysdef.scan_ms,
+                        coarse_update_ms=self.sysdef.coarse_update_ms, masters=self.masters,
+                        motion=self.sysdef.motion, **extra)
+        for e in self.sysdef.add_ons:
+            system.add_ons[e.tag].preset(dict(e.preset))
+        return system
 
     # -- state <-> system -----------------------------------------------------------
 
@@ -515,6 +584,9 @@ class Model:
         for ai, axis in enumerate(self.axes):
             snap = axis.snapshot()
             values = self.extract_axis_values(ai, snap[1])
+            if self.param_names[ai]:
+                env = axis.env
+                values = (*values, *(env[n] for n in self.param_names[ai]))
             q = tuple([self.queue_local[n] for n in queue if self.tag_axis[n] == ai]) if queue else ()
             h = tuple([e.event for e in held if e.axis == axis.name]) if held else ()
             if len(snap) > 2:
@@ -523,6 +595,10 @@ class Model:
                 flat.append((snap[0], values, q, h))
             for ti in self.tags_of_axis[ai]:
                 flat.append(self.extract_tag(ti, slots[ti].tag.name in queue if queue else False))
+        for inst in self.add_ons:
+            flat.append(inst.snapshot())
+        if self.max_changes is not None:
+            flat.append(self.budget)
         return tuple(flat)
 
     def extract_axis_values(self, ai: int, values: tuple[object, ...]) -> tuple[object, ...]:
@@ -535,6 +611,8 @@ class Model:
         s = self.slots[ti]
         tag = s.tag
         vals = tag.values
+        if s.internal:
+            return (tuple(vals.values()), tag.rung, tuple(tag.operands.values()), self.monitor_values[ti])
         busy = vals.get("pending") or queued
         if s.retire and not tag.rung and not busy and (s.rise_guard is None or s.rise_guard(vals)):
             return s.retired
@@ -561,6 +639,9 @@ class Model:
             else:
                 config, values, q, e = part
                 axis.restore((config, values))
+            pnames = self.param_names[ai]
+            if pnames:
+                axis.env.update(zip(pnames, values[len(values) - len(pnames):]))
             if q:
                 names = self.tags_of_axis[ai]
                 queue.extend([self.tags[names[k]].name for k in q])
@@ -575,6 +656,11 @@ class Model:
                 tag.rung = rung
                 tag.operands.update(zip(s.op_names, ops))
                 self.monitor_values[ti] = mon
+        for inst in self.add_ons:
+            inst.restore(flat[i])
+            i += 1
+        if self.max_changes is not None:
+            self.budget = flat[i]
         system.queue = queue
         system.held_events = held
 
@@ -590,6 +676,8 @@ class Model:
                     live[s.axis_index] += 1
         combos = self.drive_combos
         for ti, s in enumerate(self.slots):
+            if s.internal:
+                continue
             if s.tag.rung:
                 out.append(self.drop_choice[ti])
                 out.extend(combos.get(self.drop_choice[ti].index, ()))
@@ -598,6 +686,15 @@ class Model:
                     out.append(c)
                     out.extend(combos.get(c.index, ()))
         out.extend(self.fixed_choices)
+        for k, inst in enumerate(self.add_ons):
+            if inst.rung:
+                out.append(self.add_on_drop[k])
+            else:
+                out.append(self.add_on_raise[k])
+                if self.budget is None or self.budget > 0:
+                    out.extend(c for c in self.add_on_inputs[k] if inst.inputs[c.operands[0][0]] != c.operands[0][1])
+        if self.budget is not None and self.budget <= 0:
+            out = [c for c in out if c.index not in self.counted]
         # A prescan pass counts as a scan of the coarse-update clock but runs no coarse
         # update; offered only when nothing waits for one, so that requests and events
         # cannot pile up without bound behind repeated prescans.
@@ -618,12 +715,17 @@ class Model:
         """Abstract initial state for one configuration assignment, with the properties
         violated and the goals reached in it."""
         fresh = self.build_system(assignment)
-        for axis, f in zip(fresh.axes.values(), self.axes):
+        for axis, f, names in zip(fresh.axes.values(), self.axes, self.param_names):
             f.restore(axis.snapshot())
+            f.env.update({n: axis.env[n] for n in names})
         for tag, s in zip(self.tags, self.slots):
             tag.values.update(zip(s.fields, s.initial))
             tag.rung = False
             tag.operands.update(zip(s.op_names, s.default_ops))
+        for inst, other in zip(self.add_ons, getattr(fresh, "add_ons", {}).values()):
+            inst.restore(other.snapshot())
+        # a configuration other than its group's first is a change made before the first scan
+        self.budget = None if self.max_changes is None else self.max_changes - sum(1 for c in assignment if c)
         self.system.queue = []
         self.system.held_events = []
         self.system.index = 0
@@ -640,10 +742,20 @@ class Model:
             f.clear()
         system = self.system
         system.trace = trace
+        errs = [inst.status.get("Sts_ERR") if inst.status.get("Sts_ER") else None for inst in self.add_ons]
         system.advance(choice.inputs)
         system.trace = None
+        if self.budget is not None and choice.index in self.counted:
+            self.budget -= 1
         violated, reached = self.evaluate()
-        return self.extract(), violated, reached, self.facts()
+        facts = self.facts()
+        if self.add_ons:
+            # an add-on instruction's error: its Sts_ERR once Sts_ER is set (an item of error_codes)
+            new = tuple((inst.add_on.id, int(inst.status["Sts_ERR"]), 0) for inst, before in zip(self.add_ons, errs)
+                        if inst.status.get("Sts_ER") and inst.status.get("Sts_ERR") != before)
+            if new:
+                facts = dataclasses.replace(facts, errors=(*facts.errors, *new))
+        return self.extract(), violated, reached, facts
 
     def facts(self) -> StepFacts:
         fired = tuple((axis.chart.id, t) for axis, f in zip(self.axes, self.fired) for t in f)
@@ -692,7 +804,41 @@ class Model:
         queue = self.system.queue
         for ti in range(len(self.slots)):
             self.evaluate_tag(ti, self.slots[ti].tag.name in queue, axis_envs, violated, reached)
+        for k in range(len(self.add_ons)):
+            self.evaluate_add_on(k, violated, reached)
         return violated, reached
+
+    def add_on_env(self, k: int) -> dict[str, object]:
+        """What a ``scope: add_on`` property reads of add-on instruction tag ``k``."""
+        inst = self.add_ons[k]
+        env: dict[str, object] = dict(inst.env())
+        env.update(inst.status)
+        env.update(state=inst.state, rung=inst.rung, tag=inst.name)
+        for par in inst.add_on.parameters:
+            obj = self.system.axes.get(str(inst.inputs.get(par.name))) if par.alias else None
+            if obj is not None:
+                for v in obj.chart.variables:
+                    env.setdefault(f"{par.alias}.{v.name}", obj.env[v.name])
+        return env
+
+    def evaluate_add_on(self, k: int, violated: list[Property], reached: list[Property]) -> None:
+        inv, reach = self.add_on_props[k]
+        if not inv and not reach:
+            return
+        # what the properties read: the instance and the chart instances (with their parameters)
+        key = (k, self.add_ons[k].snapshot(), tuple(a.snapshot() for a in self.axes),
+               tuple(tuple(a.env[n] for n in names) for a, names in zip(self.axes, self.param_names) if names))
+        memo = self._add_on_memo.get(key)
+        if memo is None:
+            env = self.add_on_env(k)
+            memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
+            self._add_on_memo[key] = memo
+        for p, ok in zip(inv, memo[0]):
+            if not ok:
+                violated.append(p)
+        for p, ok in zip(reach, memo[1]):
+            if ok:
+                reached.append(p)
 
     def evaluate_axis(self, ai: int, violated: list[Property], reached: list[Property]) -> None:
         """Axis ``ai``'s invariants violated and goals reached, appended to the lists."""

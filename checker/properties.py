@@ -132,6 +132,25 @@ def tag_names(spec: ir.Spec, charts: Sequence[ir.Chart]) -> set[str]:
     return names
 
 
+def add_on_names(spec: ir.Spec, add_ons: Sequence[ir.AddOnInstruction]) -> set[str]:
+    """Names in ``scope: add_on``: an instance's parameters, status members, local tags,
+    recovery ``state``, ``rung``, ``tag``, what its checks read (``registered``,
+    ``distance.magnitude``, ``move.type``, ``move.target``, ``call.done``, ``<REAL>.finite``)
+    and the ``world:`` facts and chart variables of the objects its InOut parameters name
+    (``phy.faulted``, ``phy.GearingStatus``, ``handler.mode``)."""
+    names = {"state", "rung", "tag", "registered", "distance.magnitude", "move.type", "move.target", "call.done"}
+    for ao in add_ons:
+        names |= {p.name for p in ao.parameters} | {m.name for m in ao.status} | {v.name for v in ao.local_tags}
+        names |= {f"{p.name}.finite" for p in ao.parameters if p.type == "REAL"}
+        facts = {f.name for o in ao.world.objects for f in o.facts} | {"name"}
+        charts = {c.id: c for c in spec.charts}
+        for o in ao.world.objects:
+            if o.chart in charts:
+                facts |= {cp.name for cp in charts[o.chart].parameters} | {v.name for v in charts[o.chart].variables}
+        names |= {f"{p.alias}.{f}" for p in ao.parameters if p.alias for f in facts}
+    return names
+
+
 def property_files(paths: Sequence[Path | str] | None = None) -> list[Path]:
     roots = [Path(p) for p in paths] if paths else [properties_dir()]
     out: list[Path] = []
@@ -209,7 +228,13 @@ def _build(
             charts = [spec.chart(node["chart"])]
         except KeyError:
             err(("chart",), f"unknown chart {node['chart']!r}; charts: {', '.join(c.id for c in spec.charts)}")
-    if "instruction" in node:
+    add_ons = list(spec.add_ons)
+    if "instruction" in node and scope == "add_on":
+        add_ons = [a for a in spec.add_ons if a.id == node["instruction"]]
+        if not add_ons:
+            err(("instruction",), f"unknown add-on instruction {node['instruction']!r}; the spec defines: "
+                                  f"{', '.join(a.id for a in spec.add_ons) or '(none)'}")
+    elif "instruction" in node:
         try:
             ins = spec.instruction(node["instruction"])
             charts = [c for c in charts if c.id in ins.charts]
@@ -217,8 +242,14 @@ def _build(
             err(("instruction",), f"unknown instruction {node['instruction']!r}")
         if scope == "axis":
             err(("instruction",), "`instruction` filters tags; use it with `scope: tag`")
-    if scope == "axis":
-        known: set[str] = set()
+    known: set[str]
+    if scope == "add_on":
+        known = add_on_names(spec, add_ons)
+        if "chart" in node:
+            err(("chart",), "`chart` filters axes and tags; an add-on instruction property names its objects "
+                            "through its parameters (phy., pth., handler.)")
+    elif scope == "axis":
+        known = set()
         for c in charts:
             known |= axis_names(c)
     else:
@@ -237,6 +268,8 @@ def _build(
         for n, _off in unknown:
             err((key,), f"unknown name {n!r} in {text!r} for scope {scope}; known: {', '.join(sorted(known))}")
         states = sorted({st.id for c in charts for st in c.leaf_states()})
+        if scope == "add_on":
+            states = sorted({st.id for a in add_ons for st in a.recovery.states} | {"error"})
         bad = [lit for lit in state_literals(text) if lit not in states]
         for lit in bad:
             hint = difflib.get_close_matches(lit, states, n=1, cutoff=0.6)

@@ -227,6 +227,10 @@ def text(report: Report) -> str:
         f"  {d['states']:,} states, {d['transitions']:,} transitions, depth {d['depth']}, "
         f"{d['seconds']} s ({d['states_per_second']:,} states/s), peak memory {d['peak_memory_mb']} MB",
     ]
+    m = report.result.model
+    if m.add_ons:
+        lines.append("  add-on instruction tags: " + ", ".join(f"{a.name} ({a.add_on.id})" for a in m.add_ons)
+                     + (f"; at most {m.max_changes} change(s) per run" if m.max_changes is not None else ""))
     if not report.result.complete:
         lines.append(f"  INCOMPLETE: {report.result.stop_reason}")
     lines.append("properties:")

@@ -67,22 +67,16 @@ def dispatch(args: argparse.Namespace) -> int | None:
 
 
 def _system_path(name: str) -> tuple[Path | None, str | None]:
-    from checker.aoi_check import bundled_aoi_systems, is_aoi_system
     from checker.system import bundled_systems
     from statecharts.inputs import path_argument_problem
 
     systems = bundled_systems()
-    aoi = bundled_aoi_systems()
     if name in systems:
         path = systems[name]
-    elif name in aoi:
-        return None, f"{name!r} is an add-on instruction system; it has its own checker and no Promela export"
     elif path_argument_problem(name) is None and Path(name).is_file():
         path = Path(name)
     else:
         return None, f"unknown system {name!r}; bundled systems: {', '.join(systems)} (or give a system file)"
-    if is_aoi_system(path):
-        return None, f"{name!r} is an add-on instruction system; it has its own checker and no Promela export"
     return path, None
 
 
@@ -113,6 +107,10 @@ def export(args: argparse.Namespace, out: TextIO) -> int:
     try:
         spec = load_spec(args.spec)
         sysdef = load_system(path, spec)
+        if sysdef.add_ons:
+            print(f"motionchart export: {args.system!r} has add-on instruction tags; the Promela export models axes "
+                  "and their MOTION_INSTRUCTION tags only", file=sys.stderr)
+            return EXIT_USAGE
         if args.axes is not None:
             sysdef = sysdef.scaled(args.axes)
         props = load_properties(spec, args.properties)

@@ -134,8 +134,11 @@ def _vectors(args: argparse.Namespace, out: TextIO) -> int:
         kinds[v["kind"]] = kinds.get(v["kind"], 0) + 1
     out.write(f"wrote {len(suite.vectors)} vectors ({kinds.get('scenario', 0)} from scenarios, "
               f"{kinds.get('generated', 0)} generated) and manifest.json to {args.output}\n")
-    if suite.left_out:
-        out.write(f"left out: {len(suite.left_out)} scenario(s) {vec.AOI_LEFT_OUT}\n")
+    reasons: dict[str, int] = {}
+    for x in suite.left_out:
+        reasons[x["reason"]] = reasons.get(x["reason"], 0) + 1
+    for reason, n in reasons.items():
+        out.write(f"left out: {n} scenario(s): {reason}\n")
     out.write("coverage of the suite:\n")
     out.write(vec.coverage_text(cov))
     return EXIT_OK

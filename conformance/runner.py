@@ -46,6 +46,8 @@ DEFAULT_VECTOR_TIMEOUT = 120.0
 DEFAULT_STARTUP_TIMEOUT = 60.0
 DEFAULT_MAX_LINE = 4 * 1024 * 1024
 STDERR_TAIL = 4096
+#: how long the reason of an exit waits for the adapter's last words on stderr, seconds
+STDERR_GRACE = 2.0
 
 
 class ProtocolError(Exception):
@@ -117,6 +119,7 @@ class ProcessTransport(Transport):
             self.proc.stdin.write(data)
             self.proc.stdin.flush()
         except (BrokenPipeError, OSError, ValueError):
+            self._reap()
             raise AdapterExited(self.describe_exit() or "the adapter closed its input") from None
 
     def _line(self, deadline: float) -> bytes:
@@ -156,6 +159,10 @@ class ProcessTransport(Transport):
 
     def describe_exit(self) -> str:
         code = self.proc.poll()
+        if code is not None:
+            # the process is gone: its last words reach the tail when the drain reads the
+            # pipe's end (bounded: a child of the adapter may hold the pipe open)
+            self._drain.join(timeout=STDERR_GRACE)
         tail = bytes(self.stderr_tail).decode("utf-8", "replace").strip().splitlines()[-3:]
         what = "the adapter exited" if code is None or code >= 0 else f"the adapter was killed by signal {-code}"
         if code is not None and code >= 0:

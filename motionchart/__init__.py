@@ -229,16 +229,14 @@ def check(
     max_seconds: float | None = None,
     counterexamples: Path | str | None = None,
 ) -> CheckReport:
-    """Model-check a system: a bundled name (``noncip``, ``noncip_pairs``, ``cip``) or a
+    """Model-check a system: a bundled name (``noncip``, ``noncip_pairs``, ``cip``, ``aoi``...) or a
     system file, against the bundled properties or the ``properties`` files.
 
     ``axes`` sets every axis group's count; ``max_states`` / ``max_seconds`` bound the
     search (its verdict is then ``"incomplete"``); ``counterexamples`` is a directory
     where each violation's shortest run is written as a scenario.  A bad system or
-    property file raises :class:`InputError` with located diagnostics.  The add-on
-    instruction's system (``aoi``) is checked by ``motionchart check --system aoi``.
+    property file raises :class:`InputError` with located diagnostics.
     """
-    from checker.aoi_check import bundled_aoi_systems, is_aoi_system
     from checker.model import Model
     from checker.properties import load_properties
     from checker.report import build_report
@@ -249,13 +247,9 @@ def check(
     systems = bundled_systems()
     path = systems.get(str(system)) if isinstance(system, str) else None
     if path is None:
-        if isinstance(system, str) and system in bundled_aoi_systems():
-            raise ValueError(f"{system!r} is an add-on instruction system; check it with `motionchart check --system {system}`")
         path = Path(system)
         if not path.is_file():
             raise FileNotFoundError(f"unknown system {str(system)!r}; bundled systems: {', '.join(systems)} (or give a system file)")
-        if is_aoi_system(path):
-            raise ValueError(f"{path} is an add-on instruction system; check it with `motionchart check --system {path}`")
     sysdef = load_system(path, s)
     if axes is not None:
         sysdef = sysdef.scaled(axes)

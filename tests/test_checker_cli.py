@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from checker import check_cli
+from statecharts import ir
 from statecharts.loader import load_spec
 from statecharts.scenario import load_scenario, run_scenario
 
@@ -290,3 +291,21 @@ def test_a_slave_errs_while_its_master_homes(tmp_path: Path, capsys: pytest.Capt
     assert ("MAG_VIRTUAL", "homing") not in result.coverage.checks
     code, out, _ = _run(["--system", str(good)], capsys)
     assert code == 0, out
+
+
+def test_a_change_bound_offers_no_event_once_spent(spec: ir.Spec) -> None:
+    """``max_changes: 0`` on the bundled noncip system: no environment event is ever offered,
+    and only the first configuration of each group is a start (a configuration other than the
+    first is a change made before the first scan)."""
+    import dataclasses
+
+    from checker.model import Model
+    from checker.search import explore
+    from checker.system import bundled_systems, load_system
+
+    sysdef = dataclasses.replace(load_system(bundled_systems()["noncip"], spec), max_changes=0)
+    model = Model(spec, sysdef, ())
+    assert model.assignments == [tuple(0 for _ in model.axes)]
+    result = explore(model, progress=False, max_states=2000)
+    taken = {model.choices[result.via[i]].kind for i in range(result.states) if result.parent[i] >= 0}
+    assert "event" not in taken and {"raise", "drop"} <= taken

@@ -19,9 +19,8 @@ from conftest import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from checker.aoi_check import bundled_aoi_systems
 from checker.compile import FastAxis
-from checker.system import SystemDef, SystemError_, bundled_systems, load_system
+from checker.system import SystemDef, bundled_systems, load_system
 from statecharts import ir
 from statecharts.engine import AxisInstance
 from statecharts.loader import bundled_spec_dir, load_spec
@@ -216,12 +215,14 @@ def test_system_gives_the_same_observations_on_both_back_ends(spec: ir.Spec, cha
 
 # --------------------------------------------------------------------------- every bundled system
 
-#: Every bundled checking system (spec/systems/*.yaml).
+#: Every bundled checking system (spec/systems/*.yaml) of axes of one chart and their tags.
 BUNDLED_SYSTEMS = ("cip", "motion", "noncip", "noncip_pairs")
+#: The bundled systems with add-on instruction tags (their axes and devices of several charts).
+ADD_ON_SYSTEMS = ("aoi",)
 
 
 def test_every_bundled_system_is_covered() -> None:
-    assert set(bundled_systems()) == set(BUNDLED_SYSTEMS)
+    assert set(bundled_systems()) == set(BUNDLED_SYSTEMS) | set(ADD_ON_SYSTEMS)
 
 
 @pytest.fixture(scope="module")
@@ -277,9 +278,23 @@ def test_bundled_system_gives_the_same_observations_on_both_back_ends_deep(
     _same_run_on_both_back_ends(spec, systems[name], data, max_scans=150)
 
 
-@pytest.mark.parametrize("name", sorted(bundled_aoi_systems()))
-@pytest.mark.xfail(strict=True, raises=SystemError_, reason=(
-    "the add-on instruction's system is a motionchart-aoi-system/1 world whose charts run on the "
-    "engine alone (statecharts.aoi.ChartRunner); the system loader the back-ends share cannot load it yet"))
-def test_the_add_on_instruction_system_runs_on_both_back_ends(spec: ir.Spec, name: str) -> None:
-    load_system(bundled_aoi_systems()[name], spec)
+@pytest.mark.parametrize("name", ADD_ON_SYSTEMS)
+@settings(max_examples=examples(8, 200))
+@given(data=st.data())
+def test_the_add_on_instruction_system_runs_on_both_back_ends(spec: ir.Spec, systems: dict[str, SystemDef],
+                                                              name: str, data: st.DataObject) -> None:
+    """An add-on instruction system (its axes, device handler, add-on tag and the tags of its
+    calls) on both back-ends, with the drive model, driven by any of the checker's inputs at
+    any scan (events on any axis, inputs with the rung up or down, prescans)."""
+    from checker.model import Model
+    model = Model(spec, systems[name])
+    assignment = data.draw(st.sampled_from(model.assignments), label="configuration")
+    engine = model.build_system(assignment, backend=AxisInstance)
+    fast = model.build_system(assignment, backend=FastAxis)
+    assert engine.snapshot() == fast.snapshot()
+    for k in range(data.draw(st.integers(1, 30), label="scans")):
+        choice = data.draw(st.sampled_from(model.choices), label=f"scan {k}")
+        r1, r2 = engine.scan(choice.inputs), fast.scan(choice.inputs)
+        assert r1.coarse_update == r2.coarse_update
+        assert dict(r1.observations) == dict(r2.observations), f"scan {k}: {choice.label()}"
+        assert engine.snapshot() == fast.snapshot(), f"scan {k}: {choice.label()}"

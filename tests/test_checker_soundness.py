@@ -15,30 +15,28 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
-from hypothesis import given
+from conftest import examples
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from checker.aoi_check import bundled_aoi_systems
 from checker.compile import FastAxis
 from checker.model import Model
 from checker.properties import load_properties
 from checker.search import Codec
-from checker.system import SystemDef, SystemError_, bundled_systems, load_system
+from checker.system import SystemDef, bundled_systems, load_system
 from statecharts import ir
 from statecharts.engine import AxisInstance
 
 #: The systems the soundness run explores: every bundled one, ``two_axes`` and a slave
 #: axis geared to a master axis, listed after it and before it (below).
 SYSTEMS = ("cip", "motion", "noncip", "noncip_pairs", "two_axes", "geared", "geared_master_first")
-#: The add-on instruction's world has a system format of its own (``motionchart-aoi-system/1``):
-#: its charts run on the engine alone (statecharts.aoi.ChartRunner) and the checker's model
-#: cannot load it, so there is no second back-end to compare it with yet.
-AOI_GAP = ("the add-on instruction's system is a motionchart-aoi-system/1 world: the checker model "
-           "(checker.model.Model) cannot load it and its charts have no second back-end yet")
+#: The bundled systems with add-on instruction tags: explored with fewer runs (every step of
+#: the check scans each of the checker's choices on the whole system).
+ADD_ON_SYSTEMS = ("aoi",)
 
 
 def _systems(spec: ir.Spec) -> dict[str, SystemDef]:
-    out = {name: load_system(path, spec) for name, path in bundled_systems().items()}
+    out = {name: load_system(path, spec) for name, path in bundled_systems().items() if name not in ADD_ON_SYSTEMS}
     # two interchangeable axes with a small program, to exercise symmetry reduction
     base = out["noncip"]
     g = dataclasses.replace(base.groups[0], count=2, program=("MSO", "MDO", "MASD", "MAFR"))
@@ -59,11 +57,13 @@ def models(spec: ir.Spec) -> dict[str, Model]:
     return {name: Model(spec, sd, props) for name, sd in _systems(spec).items()}
 
 
-def _abstract(model: Model, codec: Codec, snapshot: tuple[object, ...], monitors: list[tuple[int, ...]]
-              ) -> tuple[bytes, list[tuple[int, ...]]]:
-    """alpha(concrete state): load it exactly, update the monitors, extract, encode."""
+def _abstract(model: Model, codec: Codec, snapshot: tuple[object, ...], monitors: list[tuple[int, ...]],
+              budget: int | None = None) -> tuple[bytes, list[tuple[int, ...]]]:
+    """alpha(concrete state): load it exactly, update the monitors, extract, encode.  ``budget``:
+    the changes the run has left (the checker's own count, no state of the engine)."""
     model.system.restore(snapshot)
     model.monitor_values = list(monitors)
+    model.budget = budget
     model.evaluate()
     return codec.encode(model.extract()), list(model.monitor_values)
 
@@ -79,18 +79,29 @@ def _successors(model: Model, codec: Codec, code: bytes) -> set[bytes]:
     return out
 
 
-def _offered(model: Model, snapshot: tuple[object, ...]) -> list[int]:
+def _offered(model: Model, snapshot: tuple[object, ...], budget: int | None = None) -> list[int]:
     """The checker's choices in a concrete state (not its canonical representative:
     under symmetry the two may name the axes differently)."""
     model.system.restore(snapshot)
+    model.budget = budget
     return [c.index for c in model.enabled()]
 
 
 def test_every_bundled_system_is_explored() -> None:
-    assert set(bundled_systems()) | {"two_axes", "geared", "geared_master_first"} == set(SYSTEMS)
+    assert set(bundled_systems()) | {"two_axes", "geared", "geared_master_first"} == set(SYSTEMS) | set(ADD_ON_SYSTEMS)
+
+
+@pytest.mark.parametrize("name", ADD_ON_SYSTEMS)
+@settings(max_examples=examples(6, 200))
+@given(data=st.data())
+def test_every_engine_run_of_an_add_on_system_is_a_path_of_the_checker(spec: ir.Spec, name: str,
+                                                                         data: st.DataObject) -> None:
+    model = Model(spec, load_system(bundled_systems()[name], spec), load_properties(spec))
+    _engine_run_is_a_checker_path(model, data, max_scans=25)
 
 
 @pytest.mark.parametrize("name", SYSTEMS)
+@settings(max_examples=examples(40))  # make deep: the deep profile's count, and the long runs below
 @given(data=st.data())
 def test_every_engine_run_is_a_path_of_the_checker(models: dict[str, Model], name: str, data: st.DataObject) -> None:
     _engine_run_is_a_checker_path(models[name], data, max_scans=25)
@@ -112,14 +123,18 @@ def _engine_run_is_a_checker_path(model: Model, data: st.DataObject, max_scans: 
     flat0, _bad, _good = model.initial(assignment)
     code = codec.encode(flat0)
     monitors = list(model.monitor_values)
-    assert _abstract(model, codec, engine.snapshot(), monitors)[0] == code
+    budget = model.budget
+    assert _abstract(model, codec, engine.snapshot(), monitors, budget)[0] == code
     for step in range(data.draw(st.integers(1, max_scans), label="scans")):
         succs = _successors(model, codec, code)
-        choice = model.choices[data.draw(st.sampled_from(_offered(model, engine.snapshot())), label=f"choice {step}")]
+        choice = model.choices[data.draw(st.sampled_from(_offered(model, engine.snapshot(), budget)),
+                                         label=f"choice {step}")]
+        if budget is not None and choice.index in model.counted:
+            budget -= 1
         r_engine = engine.scan(choice.inputs)
         r_fast = fast.scan(choice.inputs)
         assert dict(r_engine.observations) == dict(r_fast.observations), f"scan {step}: back-ends differ"
-        code, monitors = _abstract(model, codec, engine.snapshot(), monitors)
+        code, monitors = _abstract(model, codec, engine.snapshot(), monitors, budget)
         assert code in succs, (
             f"scan {step} ({choice.label()}): the engine's state, mapped through the abstraction, "
             "is not a successor in the checker")
@@ -150,10 +165,3 @@ def test_retirement_is_refused_when_a_rise_reads_a_kept_bit(spec: ir.Spec) -> No
                  if r.condition == "rung_true" else r for r in ins.table.rows)
     broken = dataclasses.replace(ins, table=dataclasses.replace(ins.table, rows=rows))
     assert retirement_check(spec, broken) is not None
-
-
-@pytest.mark.parametrize("name", sorted(bundled_aoi_systems()))
-@pytest.mark.xfail(strict=True, raises=SystemError_, reason=AOI_GAP)
-def test_the_add_on_instruction_system_loads_as_a_checker_model(spec: ir.Spec, name: str) -> None:
-    sd = load_system(bundled_aoi_systems()[name], spec)
-    Model(spec, sd, load_properties(spec))

@@ -97,14 +97,26 @@ def representative(vectors: list[dict[str, Any]]) -> list[dict[str, Any]]:
 # --------------------------------------------------------------------------- the vectors
 
 
-def test_every_vector_and_the_manifest_match_their_schemas(suite_dir: Path) -> None:
-    files = sorted(suite_dir.glob("*.json"))
-    assert len(files) > 20
-    check_vector = jsonschema.Draft202012Validator(VECTOR_SCHEMA)
-    check_manifest = jsonschema.Draft202012Validator(MANIFEST_SCHEMA)
-    for p in files:
-        doc = json.loads(p.read_text(encoding="utf-8"))
-        (check_manifest if p.name == "manifest.json" else check_vector).validate(doc)
+def test_every_vector_and_the_manifest_match_their_schemas(suite_dir: Path, vectors: list[dict[str, Any]]) -> None:
+    """Every vector file loaded (``load_vectors`` checks each against ``vector.schema.json``:
+    the test below shows it refusing one that does not match) and the manifest lists them."""
+    manifest = json.loads((suite_dir / "manifest.json").read_text(encoding="utf-8"))
+    jsonschema.Draft202012Validator(MANIFEST_SCHEMA).validate(manifest)
+    files = sorted(p.name for p in suite_dir.glob("*.json") if p.name != "manifest.json")
+    assert len(files) > 20 and len(vectors) == len(files) == manifest["count"]
+    assert sorted(f"{v['id']}.json" for v in vectors) == files == sorted(m["file"] for m in manifest["vectors"])
+
+
+def test_a_vector_that_does_not_match_the_schema_is_refused_located(vectors: list[dict[str, Any]], tmp_path: Path) -> None:
+    doc = json.loads(json.dumps(vectors[0]))
+    jsonschema.Draft202012Validator(VECTOR_SCHEMA).validate(doc)
+    del doc["scans"][0]["expect"]
+    path = tmp_path / "broken.json"
+    path.write_text(json.dumps(doc, indent=1), encoding="utf-8")
+    with pytest.raises(ScenarioError) as info:
+        load_vectors(path)
+    text = str(info.value)
+    assert "expect" in text and f"{path}:" in text and "Traceback" not in text
 
 
 def _same_files(a: Path, b: Path) -> None:
@@ -133,7 +145,7 @@ def test_the_add_on_instruction_scenarios_are_left_out_with_the_reason(suite_dir
     left = {x["file"]: x["reason"] for x in manifest["left_out"]}
     aoi = sorted(p.relative_to(ROOT / "scenarios").as_posix() for p in (ROOT / "scenarios" / "aoi").glob("*.yaml"))
     assert aoi and sorted(f for f in left if f.startswith("aoi/")) == aoi
-    assert all("add-on instruction" in left[f] for f in aoi)
+    assert all("motionchart-aoi-scenario/1" in left[f] or "calls an add-on instruction" in left[f] for f in aoi)
     assert not any(v["origin"].startswith("scenarios/aoi/") for v in (json.loads(p.read_text("utf-8"))
                                                                       for p in suite_dir.glob("scenario-*.json")))
 

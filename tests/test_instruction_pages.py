@@ -10,6 +10,8 @@ axes, Hookup Test Status 0-6 of CIP drive axes).
 
 from __future__ import annotations
 
+import functools
+import re
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +27,7 @@ def load(path: Path) -> Any:
     return YAML(typ="safe").load(path.read_text(encoding="utf-8"))
 
 
+@functools.cache
 def instruction_files() -> dict[str, dict[str, Any]]:
     """Instruction id -> its ``instruction:`` mapping, for every instruction file of the spec."""
     out: dict[str, dict[str, Any]] = {}
@@ -36,8 +39,22 @@ def instruction_files() -> dict[str, dict[str, Any]]:
     return out
 
 
-INSTRUCTIONS = instruction_files()
-EXTENDED = load(SPEC / "errors.yaml")["extended_errors"]
+#: the ids of the instruction files, found by their lines (collecting the tests parses no YAML)
+_ID_LINE = re.compile(r"^instruction:\s*\n(?:[ \t]+.*\n|\s*\n)*?[ \t]+id:\s*([A-Za-z_][\w]*)\s*$", re.MULTILINE)
+INSTRUCTION_IDS = sorted(m.group(1) for p in (SPEC / "instructions").rglob("*.yaml")
+                         if "format: motionchart-spec/1" in (t := p.read_text(encoding="utf-8"))
+                         for m in [_ID_LINE.search(t)] if m)
+
+
+
+
+@functools.cache
+def extended_errors() -> list[dict[str, Any]]:
+    return list(load(SPEC / "errors.yaml")["extended_errors"])
+
+
+def test_the_instruction_ids_found_by_line_are_those_of_the_files() -> None:
+    assert sorted(instruction_files()) == INSTRUCTION_IDS
 
 
 def section_table(page: str, heading: str) -> list[dict[str, str]]:
@@ -67,20 +84,20 @@ def expected_codes(ins: dict[str, Any]) -> tuple[set[tuple[int, int]], set[tuple
     """(every documented code, the codes this instruction's own checks and aborts report)."""
     mnemonic = ins.get("mnemonic", ins["id"])
     modelled = {key(c["err"], c.get("exerr")) for c in [*ins.get("checks", []), *ins.get("aborts", [])]}
-    documented = {key(x["err"], x["exerr"]) for x in EXTENDED if x["instruction"] in (mnemonic, ins["id"])}
+    documented = {key(x["err"], x["exerr"]) for x in extended_errors() if x["instruction"] in (mnemonic, ins["id"])}
     return modelled | documented, modelled
 
 
 def test_every_instruction_has_a_page() -> None:
-    assert len(INSTRUCTIONS) >= 15
-    assert {p.stem for p in PAGES.glob("*.md")} == set(INSTRUCTIONS) | {a["id"] for a in addon_files()}
+    assert len(instruction_files()) >= 15
+    assert {p.stem for p in PAGES.glob("*.md")} == set(instruction_files()) | {a["id"] for a in addon_files()}
 
 
-@pytest.mark.parametrize("ins_id", sorted(INSTRUCTIONS))
+@pytest.mark.parametrize("ins_id", INSTRUCTION_IDS)
 def test_page_lists_every_documented_code(ins_id: str) -> None:
     rows = section_table((PAGES / f"{ins_id}.md").read_text(encoding="utf-8"), "Error codes")
     listed = [key(r["ERR"], r["EXERR"]) for r in rows]
-    every, modelled = expected_codes(INSTRUCTIONS[ins_id])
+    every, modelled = expected_codes(instruction_files()[ins_id])
     assert len(listed) == len(set(listed)), f"{ins_id}: a code is listed twice"
     assert set(listed) == every, f"{ins_id}: missing {sorted(every - set(listed))}, extra {sorted(set(listed) - every)}"
     for r in rows:

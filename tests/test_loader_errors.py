@@ -13,6 +13,7 @@ give a SpecError or a loaded spec, and nothing else.
 
 from __future__ import annotations
 
+import functools
 import io
 import json
 import os
@@ -721,7 +722,10 @@ def _scalars_of(node: Any) -> Iterator[str]:
 
 #: Every text scalar of the bundled spec (ids, names, events, expressions...): swapping
 #: one for another keeps the YAML and often the schema valid and stresses the semantics.
-_SPEC_STRINGS = sorted({s for rel in _FILES for s in _scalars_of(_RT.load(_TEXTS[rel])) if len(s) < 120})
+@functools.cache
+def _spec_strings() -> list[str]:
+    """(Parsed when the fuzz test first draws one, not when the tests are collected.)"""
+    return sorted({s for rel in _FILES for s in _scalars_of(_RT.load(_TEXTS[rel])) if len(s) < 120})
 
 
 def _slots(node: Any, label: str, out: dict[str, list[tuple[Any, Any]]]) -> dict[str, list[tuple[Any, Any]]]:
@@ -756,7 +760,7 @@ def _tree_mutation(draw: st.DrawFn, rel: str) -> bytes:
         op = draw(st.sampled_from(["reuse_string", "reuse_string", "retype", "value", "delete", "duplicate", "swap",
                                    "int_key"]))
         if op == "reuse_string":
-            container[key] = draw(st.sampled_from(_SPEC_STRINGS))
+            container[key] = draw(st.sampled_from(_spec_strings()))
         elif op == "retype":
             container[key] = draw(_RETYPED)
         elif op == "value":

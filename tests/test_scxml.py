@@ -34,6 +34,7 @@ from pathlib import Path
 from xml.etree import ElementTree as ET
 
 import pytest
+from conftest import examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from statemachine.io import load
@@ -108,7 +109,7 @@ def event_sequences(chart: ir.Chart) -> st.SearchStrategy[list[str]]:
     return st.lists(st.sampled_from([e.name for e in chart.events]), max_size=MAX_EVENTS)
 
 
-_SETTINGS = settings()
+_SETTINGS = settings(max_examples=examples(40))  # make deep: the deep profile's count
 
 
 # --------------------------------------------------------------------------- the property

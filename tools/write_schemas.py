@@ -428,8 +428,13 @@ SYSTEM_CONFIG = {
     "properties": {
         "name": NAME_KEY, "description": {"type": "string"},
         "variables": {"type": "object", "additionalProperties": SCALAR},
+        "parameters": {"type": "object", "additionalProperties": SCALAR,
+                       "description": "A device's chart parameters in this configuration."},
+        "state": {"type": "string", "description": "The initial state in this configuration (default: the group's)."},
     },
 }
+GROUP_ENVIRONMENT = {"type": "array", "items": ID,
+                     "description": "The environment events offered on these axes (default: the system's `environment`)."}
 system = {
     "$schema": "https://json-schema.org/draft/2020-12/schema",
     "$id": "https://motionchart.invalid/schema/system-1.json",
@@ -452,11 +457,42 @@ system = {
                 "variables": {"type": "object", "additionalProperties": SCALAR},
                 "configurations": {"type": "array", "minItems": 1, "items": SYSTEM_CONFIG},
                 "program": {"type": "array", "items": ID},
+                "environment": GROUP_ENVIRONMENT,
                 "masters": {"type": "object", "propertyNames": ID, "additionalProperties": ID,
                             "description": "The axis bound to the master-axis operand of an instruction of `program` "
                                            "that has one (MAG's MasterAxis): instruction -> the name of an axis (or "
                                            "axis group, meaning its first axis) of another group of the system."},
             }}},
+        "devices": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False, "required": ["name", "type"],
+            "description": "Chart instances that are not axes (a device handler an add-on instruction is given).",
+            "properties": {
+                "name": NAME_KEY, "type": {"type": "string"}, "chart": ID, "state": {"type": "string"},
+                "variables": {"type": "object", "additionalProperties": SCALAR},
+                "parameters": {"type": "object", "additionalProperties": SCALAR,
+                               "description": "Instance parameters of the chart (a handler's id and axes)."},
+                "events": {"type": "array", "items": ID,
+                           "description": "Environment events sent once the instance is set up."},
+                "configurations": {"type": "array", "minItems": 1, "items": SYSTEM_CONFIG},
+                "environment": GROUP_ENVIRONMENT,
+            }}},
+        "add_ons": {"type": "array", "items": {
+            "type": "object", "additionalProperties": False, "required": ["tag", "instruction", "operands"],
+            "description": "Add-on instruction tags of the program, each with its operands.",
+            "properties": {
+                "tag": NAME_KEY, "instruction": ID,
+                "operands": {"type": "object", "additionalProperties": SCALAR},
+                "preset": {"type": "object", "additionalProperties": SCALAR,
+                           "description": "Status members and local tags set before the first scan."},
+                "inputs": {"type": "object", "additionalProperties": {"type": "array", "items": SCALAR, "minItems": 1},
+                           "description": "Input parameters the environment may change while the tag's rung is "
+                                          "false, with their values."},
+            }}},
+        "motion": {"type": "boolean",
+                   "description": "Run the drive model (positions, velocities, reaching targets) in the search "
+                                  "instead of offering its events as inputs; for systems whose checks read positions."},
+        "max_changes": {"type": "integer", "minimum": 0,
+                        "description": "At most this many environment events and add-on input changes per run."},
         "operands": {"type": "object", "additionalProperties": {
             "type": "object", "additionalProperties": {"type": "array", "items": SCALAR, "minItems": 1}}},
         "environment": {"type": "array", "items": ID},
@@ -477,7 +513,7 @@ PROPERTY = {
         "name": ID,
         "kind": {"enum": ["invariant", "reachable", "deadlock_free", "response", "cover"]},
         "description": {"type": "string"}, "source": SOURCE, "interpretation": INTERP,
-        "scope": {"enum": ["axis", "tag"]},
+        "scope": {"enum": ["axis", "tag", "add_on"]},
         "chart": ID, "instruction": ID,
         "systems": {"type": "array", "items": ID, "minItems": 1,
                     "description": "Check the property only on these systems (by name); default: every system with its chart."},

@@ -1,5 +1,11 @@
-"""IR + scenario runs -> the Markdown reference: one page per chart and per instruction,
-the interpretations, the error-code catalog, the traceability matrix and an index.
+"""IR + scenario runs -> the Markdown reference: one page per chart, per instruction and
+per add-on instruction, the interpretations, the error-code catalog, the traceability
+matrix and an index.
+
+The pages are built from the same sections (:func:`page_head`, :func:`flowchart_section`,
+:func:`checks_section`, :func:`documented_codes_table`, :func:`chart_sections`): an
+add-on instruction's page is an instruction's page whose ordered checks report its own
+codes and whose recovery chart is drawn and tabled like a chart's.
 
 Pipeline position: IR (+ :mod:`statecharts.render.traceability`) -> **reference** ->
 ``generated/*.md``, ``generated/charts/*.md``, ``generated/instructions/*.md``.

@@ -53,7 +53,7 @@ deps-spin:
 
 check: install
 	@$(BIN)/motionchart validate
-	@$(BIN)/motionchart simulate --summary scenarios examples/programs
+	@$(BIN)/motionchart simulate --summary scenarios $(filter-out %.check.yaml,$(wildcard examples/programs/*.yaml))
 	@$(BIN)/motionchart check
 	@$(BIN)/motionchart check --system aoi
 

@@ -509,6 +509,7 @@ class Model:
         self.max_changes = sysdef.max_changes
         self.budget = self.max_changes
         self.counted = {c.index for c in self.event_choices if self._is_environment(c)}
+        self.counted |= {c.index for b in list(self.counted) for c in self.drive_combos.get(b, ())}
         self.counted |= {c.index for cs in self.add_on_inputs for c in cs}
         # layout, continued: one part per add-on instruction tag, then the changes left
         self.width += len(self.add_ons) + (self.max_changes is not None)

@@ -122,14 +122,24 @@ def test_an_undocumented_code_is_found(tmp_path: Path, capsys: pytest.CaptureFix
     f = spec_dir / "addons" / f"{AOI}.yaml"
     f.write_text(f.read_text(encoding="utf-8").replace(
         "    - {code: 1017, name: Negative speed,", "    - {code: 1019, name: Negative speed,", 1), encoding="utf-8")
-    code, out, err = _check(["--system", "aoi", "--spec", str(spec_dir), "--json", "-q", "--max-states", "3000"],
-                            capsys)
+    out_dir = tmp_path / "ce"
+    code, out, err = _check(["--system", "aoi", "--spec", str(spec_dir), "--json", "-q", "--max-states", "3000",
+                             "--counterexamples", str(out_dir)], capsys)
     assert code == 1, err
     bad = _violated(out)
     assert "aoi_documented_codes_only" in bad
+    ce = bad["aoi_documented_codes_only"]["counterexample"]
     # by hand: Set_Speed becomes -1 while the rung is false and the rung goes true in the same scan;
     # every check before the speed check passes in the set-up (003 §1.3.2 row order)
-    assert bad["aoi_documented_codes_only"]["counterexample"]["steps"] == ["Sync rung up (Set_Speed=-1.0)"]
+    assert ce["steps"] == ["Sync rung up (Set_Speed=-1.0)"]
+    # the scenario writes the input as the step's operands: the copy errs with 1019, the bundled spec with 1017
+    path = Path(ce["scenario"])
+    mutated = load_spec([spec_dir])
+    assert run_scenario(load_scenario(path, mutated), mutated).passed
+    bundled = load_spec()
+    refuted = run_scenario(load_scenario(path, bundled), bundled)
+    assert [(m.field, m.expected, m.actual) for m in refuted.mismatches if m.field == "Sts_ERR"] == [
+        ("Sts_ERR", 1019, 1017)]
 
 
 BAD_SYSTEM = """\

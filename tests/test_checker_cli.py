@@ -293,19 +293,23 @@ def test_a_slave_errs_while_its_master_homes(tmp_path: Path, capsys: pytest.Capt
     assert code == 0, out
 
 
-def test_a_change_bound_offers_no_event_once_spent(spec: ir.Spec) -> None:
-    """``max_changes: 0`` on the bundled noncip system: no environment event is ever offered,
-    and only the first configuration of each group is a start (a configuration other than the
-    first is a change made before the first scan)."""
+@pytest.mark.parametrize("name", ["noncip", "motion"])
+def test_a_change_bound_offers_no_event_once_spent(spec: ir.Spec, name: str) -> None:
+    """``max_changes: 0`` on a bundled system: no environment event is ever offered (alone or
+    with a drive event; the drive model's own events are no changes), and only the first
+    configuration of each group is a start (a configuration other than the first is a
+    change made before the first scan)."""
     import dataclasses
 
     from checker.model import Model
     from checker.search import explore
     from checker.system import bundled_systems, load_system
 
-    sysdef = dataclasses.replace(load_system(bundled_systems()["noncip"], spec), max_changes=0)
+    sysdef = dataclasses.replace(load_system(bundled_systems()[name], spec), max_changes=0)
     model = Model(spec, sysdef, ())
     assert model.assignments == [tuple(0 for _ in model.axes)]
     result = explore(model, progress=False, max_states=2000)
-    taken = {model.choices[result.via[i]].kind for i in range(result.states) if result.parent[i] >= 0}
-    assert "event" not in taken and {"raise", "drop"} <= taken
+    taken = [model.choices[result.via[i]] for i in range(result.states) if result.parent[i] >= 0]
+    environment = {e.name for c in model.charts.values() for e in c.events if e.kind == "environment"}
+    assert not [c.label() for c in taken for e in c.inputs.events if e.event in environment]
+    assert {"raise", "drop"} <= {c.kind for c in taken}

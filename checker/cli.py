@@ -141,8 +141,8 @@ def _missing(paths: Sequence[str]) -> list[str]:
 
 
 def _validate(args: argparse.Namespace, out: TextIO) -> int:
-    """Load the whole spec, its add-on instructions and the motion instructions they call
-    (``instructions/motion/``) included, as every command loads it; every problem is reported."""
+    """Load the whole spec, its add-on instructions included, as every command loads it;
+    every problem is reported."""
     from statecharts.loader import load_spec
 
     missing = _missing(args.paths)

@@ -14,9 +14,9 @@ the implementation must support to run it and the coverage items it exercises.
 Two kinds:
 
 * ``scenario``: every hand-written scenario under ``scenarios/`` in the main format
-  (each one must pass on the engine).  The scenarios of the add-on instruction are in
-  their own format (``motionchart-aoi-scenario/1``) and run on a separate world; they
-  are listed in the manifest as left out until that format joins the main one.
+  (each one must pass on the engine).  A scenario that calls an add-on instruction or
+  sets up a device is listed in the manifest as left out: version 1 of the vector format
+  carries programs of motion instruction calls on axes only.
 * ``generated``: for every transition, documented error code, instruction x state
   cell and ordered-check boundary that the checker reaches on a bundled system, the
   shortest run that reaches it (the search is breadth first and records the first
@@ -74,9 +74,6 @@ def suite_plan(path: Path = SUITE_FILE) -> tuple[tuple[str, ...], dict[str, str]
 
 
 DEFAULT_SYSTEMS, NOT_DRIVEN = suite_plan()
-AOI_SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
-AOI_LEFT_OUT = ("written in the add-on instruction's own scenario format (motionchart-aoi-scenario/1), "
-                "which runs on a separate world of its own; vectors carry the main scenario format only")
 ADDON_LEFT_OUT = ("calls an add-on instruction or sets up a device (docs/aoi.md); version 1 of the vector format "
                   "carries programs of motion instruction calls on axes only")
 LADDER_LEFT_OUT = ("runs a ladder program file (docs/programs.md); version 1 of the vector format carries "
@@ -245,9 +242,6 @@ def scenario_vectors(spec: ir.Spec, paths: Sequence[Path | str], suite: Suite,
         rel = _relative(f, roots)
         errors: list[Diagnostic] = []
         tree = read_document(f, errors, what="scenario")
-        if isinstance(tree, Mapping) and tree.get("format") == AOI_SCENARIO_FORMAT:
-            suite.left_out.append({"file": rel, "reason": AOI_LEFT_OUT})
-            continue
         setup_node = tree.get("setup") if isinstance(tree, Mapping) else None
         if isinstance(setup_node, Mapping) and isinstance(setup_node.get("program"), (str, Mapping)):
             suite.left_out.append({"file": rel, "reason": LADDER_LEFT_OUT})

@@ -138,9 +138,7 @@ RECOVERY_TRANSITION_KEYS = frozenset({"from", "to", "when"}) | _PROVENANCE
 ON_DONE_KEYS = frozenset({"when", "set"}) | _PROVENANCE
 SCAN_RULE_KEYS = frozenset({"clear", "abort_call", "forget"}) | _PROVENANCE
 WORLD_KEYS = frozenset({"objects"}) | _PROVENANCE
-WORLD_OBJECT_KEYS = frozenset({"kind", "chart", "on_scan", "stop", "register", "setup", "facts"}) | _PROVENANCE
-WORLD_SETUP_KEYS = frozenset({"variables", "rules", "then_set"})
-SETUP_RULE_KEYS = frozenset({"when", "state", "variables"})
+WORLD_OBJECT_KEYS = frozenset({"kind", "chart", "register", "facts"}) | _PROVENANCE
 FACT_KEYS = frozenset({"name", "when", "variable", "set"}) | _PROVENANCE
 FACT_SET_KEYS = frozenset({"value", "fire"})
 
@@ -183,8 +181,6 @@ NODE_KEYS: dict[str, frozenset[str]] = {
     "scan_rule": SCAN_RULE_KEYS,
     "world": WORLD_KEYS,
     "world_object": WORLD_OBJECT_KEYS,
-    "world_setup": WORLD_SETUP_KEYS,
-    "setup_rule": SETUP_RULE_KEYS,
     "fact": FACT_KEYS,
     "fact_set": FACT_SET_KEYS,
 }
@@ -1632,7 +1628,6 @@ def _build_spec(
     failed_files = 0
     source_errors: list[Diagnostic] = list(registry_errors)
     cited_trees: list[tuple[str, Any]] = []
-    sub_documents: list[tuple[str, Any]] = []
     if registry is not None:
         for name, tree in side:
             source_errors.extend(sources.tree_source_diagnostics(name, tree, registry))
@@ -1647,11 +1642,8 @@ def _build_spec(
             cited_trees.append((name, tree))
         if _other_format(tree):
             # properties, systems... live beside the spec and have their own loaders; an
-            # interpretation they cite still counts as used.  The motion instructions an
-            # add-on instruction calls are part of the spec: checked below, with it.
+            # interpretation they cite still counts as used.
             b.used_interpretations.update(_cited_interpretations(tree))
-            if addon_loader.is_sub_instruction(tree):
-                sub_documents.append((name, tree))
             continue
         b.errors.extend(schema_diagnostics(name, tree, schema, "a spec file"))
         if len(b.errors) == before:
@@ -1758,13 +1750,7 @@ def _build_spec(
                 b.error(f, ("add_on_instruction", "id"), f"duplicate instruction {node['id']!r}")
                 continue
             if complete:
-                add_ons[node["id"]] = addon_loader.build_add_on(b, f, node, charts)
-    if sub_documents:
-        sub_errors: list[Diagnostic] = []
-        subs = addon_loader.build_sub_instructions(sub_documents, sub_errors)
-        b.errors.extend(sub_errors)
-        if not sub_errors:
-            b.errors.extend(addon_loader.undefined_calls(list(add_ons.values()), subs))
+                add_ons[node["id"]] = addon_loader.build_add_on(b, f, node, charts, tuple(instructions.values()))
 
     # cross-file references: error codes and interpretations
     codes = {e.code for e in errors}

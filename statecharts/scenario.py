@@ -200,10 +200,6 @@ def load_scenario_document(name: str, tree: Any, spec: ir.Spec) -> Scenario:
 def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
     name = str(path)
     errors: list[Diagnostic] = []
-    if isinstance(tree, Mapping) and tree.get("format") == "motionchart-aoi-scenario/1":
-        # add-on instruction scenarios (handlers, several axes, AOI instances): docs/aoi.md
-        from statecharts import aoi
-        return aoi.load_aoi_scenario(path, tree, aoi.for_spec(spec))  # type: ignore[return-value]  # run_scenario hands it to the AOI runner
     errors.extend(schema_diagnostics(name, tree, scenario_schema(), "a scenario"))
     if errors:
         raise ScenarioError(errors)
@@ -598,16 +594,9 @@ def run_scenario(
     long scenario runs); with ``keep_rows=False`` the result holds no rows, only what the
     verdict needs (the latest observations and the mismatches), so a run of a million
     scans takes constant memory."""
-    from statecharts import aoi
     from statecharts.program.scenario import ProgramScenario, run_program_scenario
     if isinstance(scenario, ProgramScenario):
         return run_program_scenario(scenario, spec, on_row=on_row, keep_rows=keep_rows)
-    if isinstance(scenario, aoi.AoiScenario):
-        result: ScenarioResult = aoi.run_aoi_scenario(scenario, aoi.for_spec(spec))
-        if on_row is not None:
-            for row in result.rows:
-                on_row(row)
-        return result
     try:
         system = build_system(scenario, spec)
     except (EvalError, ValueError) as exc:

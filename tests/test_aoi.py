@@ -21,14 +21,14 @@ from conftest import ScenarioRuns, examples
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from statecharts import aoi, rotary
+from statecharts import rotary
 from statecharts.diagnostics import ScenarioError
 from statecharts.loader import load_spec
 from statecharts.scan import System
 from statecharts.scenario import load_scenario, run_scenario
 
 PROJECT = Path(__file__).resolve().parents[1]
-SPEC = aoi.load_aoi()
+SPEC = load_spec().add_ons[0]
 
 #: The 21 documented codes of 003 §2.4, typed in by hand.
 DOCUMENTED_CODES = {1000, 1001, 1002, 1005, 1006, 1007, 1008, 1010, 1011, 1012, 1013, 1014, 1015, 1016, 1017,
@@ -221,7 +221,7 @@ def test_engine_agrees_with_the_oracle(w: dict[str, Any]) -> None:
 
 
 def test_every_documented_code_is_expected_by_a_scenario() -> None:
-    spec_codes = {code for code, _ in SPEC.errors}
+    spec_codes = {e.code for e in SPEC.errors}
     assert spec_codes == DOCUMENTED_CODES
     seen: set[int] = set()
     main_spec = load_spec()
@@ -463,9 +463,8 @@ def _spec_copy(tmp_path: Path) -> Path:
 
 def test_the_bundled_aoi_spec_loads_from_a_copy(tmp_path: Path) -> None:
     root = _spec_copy(tmp_path)
-    copy = aoi.load_aoi(root)
-    assert repr(copy.add_on).replace(str(root), str(PROJECT / "spec")) == repr(SPEC.add_on)
-    assert repr(copy.instructions).replace(str(root), str(PROJECT / "spec")) == repr(SPEC.instructions)
+    copy = load_spec([root])
+    assert repr(copy.add_ons[0]).replace(str(root), str(PROJECT / "spec")) == repr(SPEC)
 
 
 def test_aoi_spec_errors_are_all_reported_with_their_place(tmp_path: Path) -> None:
@@ -478,25 +477,14 @@ def test_aoi_spec_errors_are_all_reported_with_their_place(tmp_path: Path) -> No
     text = text.replace("call: {instruction: MAH,", "call: {instruction: MAHX,")
     text = text.replace("interpretation: INT-021}", "interpretation: INT-999}")
     f.write_text(text, encoding="utf-8")
-    sub = root / "instructions" / "motion" / "MAG.yaml"
-    sub.write_text(sub.read_text(encoding="utf-8").replace("err: 16", "err: sixteen"), encoding="utf-8")
+    mag = root / "instructions" / "cip" / "MAG.yaml"  # the MAG the recovery calls on the CIP axis
+    mag.write_text(mag.read_text(encoding="utf-8").replace('"master.HomingStatus"', '"master.HomingStatuz"'), encoding="utf-8")
     with pytest.raises(SpecError) as exc:
-        aoi.load_aoi(root)
+        load_spec([root])
     text = str(exc.value)
-    for needle in ("'__import__' is not allowed", "Cfg_MoveTyp", "unknown sub-instruction 'MAHX'", "INT-999", "MAG.yaml"):
+    for needle in ("'__import__' is not allowed", "Cfg_MoveTyp", "unknown instruction 'MAHX'", "INT-999", "MAG.yaml"):
         assert needle in text, (needle, text)
     assert "raM_Opr_SyncPthPhyAx_CD.yaml:" in text
-
-
-@pytest.mark.parametrize("name", ["subinstruction.schema.json", "aoi-scenario.schema.json"])
-def test_aoi_schemas_are_valid_and_ship(name: str) -> None:
-    import json
-    from importlib import resources
-
-    import jsonschema
-    doc = json.loads((PROJECT / "spec" / "schema" / name).read_text(encoding="utf-8"))
-    jsonschema.Draft202012Validator.check_schema(doc)
-    assert (resources.files("motionchart_spec") / "schema" / name).is_file()
 
 
 @pytest.mark.parametrize(("position", "velocity"), [(".inf", ".nan"), ("1.0e+308", "1.0e+308"), ("-.inf", "-1.0e+308")])

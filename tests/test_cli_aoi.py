@@ -24,8 +24,7 @@ from pathlib import Path
 import pytest
 
 from checker.cli import main
-from statecharts.aoi import bundled_aoi
-from statecharts.loader import bundled_spec_dir
+from statecharts.loader import bundled_spec_dir, load_spec
 
 DIAGNOSTIC = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<rest>.*)$")
 AOI_ID = "raM_Opr_SyncPthPhyAx_CD"
@@ -93,10 +92,10 @@ def test_validate_prints_one_summary_with_the_add_on_instruction(capsys: pytest.
     assert (rc, err) == (0, "")
     (line,) = out.splitlines()
     assert line.startswith("spec OK: ")
-    aoi = bundled_aoi()
-    assert (len(aoi.add_on.checks), len(aoi.errors), len(aoi.instructions)) == (
-        DOCUMENTED_CHECKS, DOCUMENTED_CODES, DOCUMENTED_SUBS)
-    rec = aoi.add_on.recovery
+    (add_on,) = load_spec().add_ons
+    calls = {s.call.instruction for s in add_on.recovery.states if s.call} | {add_on.rung_false.abort_call}
+    assert (len(add_on.checks), len(add_on.errors), len(calls)) == (DOCUMENTED_CHECKS, DOCUMENTED_CODES, DOCUMENTED_SUBS)
+    rec = add_on.recovery
     assert line.endswith(f", add-on instruction {AOI_ID} ({DOCUMENTED_CHECKS} checks, {DOCUMENTED_CODES} codes, "
                          f"{len(rec.states)} recovery states, {len(rec.transitions)} transitions; "
                          "calls MAG, MAH, MAM, MAS, MRP)")
@@ -154,7 +153,7 @@ def test_malformed_aoi_yaml_is_a_located_error(capsys: pytest.CaptureFixture[str
     ("{from: homing, to: moving,", "{from: homing_zz, to: moving,", "homing_zz",
      ("add_on_instruction.recovery.transitions[4].from", "unknown state")),
     ("call: {instruction: MAH, axis: phy}", "call: {instruction: MZZ, axis: phy}", "MZZ",
-     ("add_on_instruction.recovery.states[4].call.instruction", "unknown sub-instruction")),
+     ("add_on_instruction.recovery.states[4].call.instruction", "unknown instruction")),
     # a repeated check id is refused by the loader itself (anchors and diagram nodes need it unique)
     ("{id: handler_running, err: 1001,", "{id: registered, err: 1001,", "{id: registered, err: 1001,",
      ("add_on_instruction.checks[1].id", "duplicate check 'registered'")),
@@ -195,9 +194,10 @@ def test_a_spec_without_the_add_on_instruction_is_refused_by_commands_that_need_
 
 
 def test_bad_sub_instruction_is_a_located_error(capsys: pytest.CaptureFixture[str], spec_copy: Path) -> None:
-    path = edit(spec_copy / "instructions" / "motion" / "MAM.yaml", "err: 17,", "err: -17,")
+    # the MAM the recovery calls on the CIP axis is the main spec's
+    path = edit(spec_copy / "instructions" / "cip" / "MAM.yaml", "err: 17,", "err: -17,")
     rc, out, err = run(capsys, "validate", str(spec_copy))
-    assert_located(rc, out, err, path, line_of(path, "err: -17,"), "instruction.checks[1].err")
+    assert_located(rc, out, err, path, line_of(path, "err: -17,"), "instruction.checks[10].err")
 
 
 def test_aoi_and_main_spec_errors_are_reported_together(capsys: pytest.CaptureFixture[str],
@@ -251,16 +251,16 @@ BREAKS = {
                            "{id: registered, err: 1001,", "{id: registered, err: 1001,",
                            ("add_on_instruction.checks[1].id", "duplicate check 'registered'")),
     # a motion instruction the recovery calls, with an error code below 1
-    "sub_instruction_code": ("instructions/motion/MAM.yaml", "err: 17,", "err: -17,", "err: -17,",
-                             ("instruction.checks[1].err",)),
+    "sub_instruction_code": ("instructions/cip/MAM.yaml", "err: 17,", "err: -17,", "err: -17,",
+                             ("instruction.checks[10].err",)),
     # a check of a motion instruction reading a name an axis does not offer
-    "sub_instruction_name": ("instructions/motion/MAM.yaml", '"axis.direct_control"', '"axis.zz_control"',
-                             "axis.zz_control", ("instruction.checks[0].fails", "unknown name(s) axis.zz_control")),
+    "sub_instruction_name": ("instructions/cip/MAM.yaml", '"axis.DirectControlStatus"', '"axis.zz_control"',
+                             "axis.zz_control", ("instruction.checks[6].fails_when", "axis.zz_control")),
 }
 
 
-#: The breaks of a motion instruction file are tried on the commands that load no add-on
-#: world (they read those files only through the spec loader); the duplicated check id on all.
+#: The breaks of a motion instruction file are tried on the commands that read no add-on
+#: instruction; the duplicated check id on all.
 CASES = [(c, "duplicate_check_id") for c in sorted(COMMANDS)] + [
     (c, b) for b in ("sub_instruction_code", "sub_instruction_name")
     for c in ("validate", "check", "export", "docs", "diagram_chart", "simulate_axis")]
@@ -286,13 +286,13 @@ def test_a_spec_validate_refuses_is_refused_by_every_command(capsys: pytest.Capt
 
 def test_an_add_on_call_of_a_missing_motion_instruction_is_refused(capsys: pytest.CaptureFixture[str],
                                                                    spec_copy: Path) -> None:
-    (spec_copy / "instructions" / "motion" / "MAH.yaml").unlink()
+    (spec_copy / "instructions" / "cip" / "MAH.yaml").unlink()  # MAH of the CIP axis, which the recovery calls
     path = aoi_file(spec_copy)
     for argv in (("validate", str(spec_copy)), ("diagram", "AxisCIP", "--spec", str(spec_copy))):
         rc, out, err = run(capsys, *argv)
         assert rc == 1 and out == "" and "Traceback" not in err
         assert f"{path}:{line_of(path, 'call: {instruction: MAH, axis: phy}')}:" in err
-        assert "unknown sub-instruction 'MAH'" in err
+        assert "MAH has no variant for chart AxisCIP" in err
 
 
 def _env(**extra: str) -> dict[str, str]:

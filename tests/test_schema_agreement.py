@@ -77,8 +77,6 @@ SCHEMA_NODES: dict[str, tuple[str, ...]] = {
     "scan_rule": ("/properties/add_on_instruction/properties/rung_false", "/properties/add_on_instruction/properties/prescan"),
     "world": ("/properties/add_on_instruction/properties/world",),
     "world_object": ("/properties/add_on_instruction/properties/world/properties/objects/items",),
-    "world_setup": ("/properties/add_on_instruction/properties/world/properties/objects/items/properties/setup",),
-    "setup_rule": ("/properties/add_on_instruction/properties/world/properties/objects/items/properties/setup/properties/rules/items",),
     "fact": ("/properties/add_on_instruction/properties/world/properties/objects/items/properties/facts/items",),
     "fact_set": ("/properties/add_on_instruction/properties/world/properties/objects/items/properties/facts/items/properties/set/items",),
 }
@@ -199,8 +197,6 @@ IR_RECORDS: dict[str, tuple[type, dict[str, str]]] = {
     "scan_rule": (ir.ScanRule, _PROV),
     "world": (ir.World, _PROV),
     "world_object": (ir.WorldObject, _PROV),
-    "world_setup": (ir.WorldSetup, {}),
-    "setup_rule": (ir.SetupRule, {}),
     "fact": (ir.Fact, _PROV),
     "fact_set": (ir.FactSet, {}),
 }

@@ -15,7 +15,6 @@ from typing import Any
 import pytest
 
 from statecharts import sources as S
-from statecharts.aoi import load_aoi
 from statecharts.diagnostics import SpecError
 from statecharts.loader import bundled_spec_dir, load_spec, read_yaml
 from statecharts.render.sources import citing_elements, docs_page
@@ -75,7 +74,6 @@ def test_every_bundled_source_resolves() -> None:
     bad = [(f, t, S.source_problems(t, reg)) for f, t in texts if S.source_problems(t, reg)]
     assert bad == []
     load_spec()
-    load_aoi()
 
 
 def test_no_citation_names_a_file_a_reader_lacks() -> None:
@@ -169,7 +167,7 @@ def test_add_on_instruction_loader_refuses_too(spec_copy: Path) -> None:
     assert m is not None
     line = _replace(path, m.group(0), 'source: "003 §2.2"')
     with pytest.raises(SpecError) as exc:
-        load_aoi(spec_copy)
+        load_spec([spec_copy])
     msgs = [str(d) for d in exc.value.diagnostics]
     assert any(e.startswith(f"{path}:{line}:") and "'003' is not a registered source" in e for e in msgs), msgs
 

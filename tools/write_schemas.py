@@ -284,16 +284,12 @@ add_on_instruction = obj(
             **PROV,
             "objects": {"type": "array", "minItems": 1, "items": obj(["kind", "chart", "facts", "source"], {
                 "kind": ID, "chart": ID, **PROV,
-                "on_scan": ID_LIST, "stop": ID_LIST, "register": ID_LIST,
-                "setup": obj(["rules"], {
-                    "variables": EXPR_MAP,
-                    "rules": {"type": "array", "items": obj(["when"], {"when": EXPR, "state": ID, "variables": EXPR_MAP})},
-                    "then_set": ID_LIST,
-                }, "From a scenario's flags to the chart's initial configuration."),
+                "register": {**ID_LIST, "description": "The events a method sends to register with a device of this kind."},
                 "facts": {"type": "array", "items": obj(["name", "source"], {
                     "name": ID, "when": EXPR, "variable": ID, **PROV,
-                    "set": {"type": "array", "items": obj(["value", "fire"], {
-                        "value": SCALAR, "fire": {"type": "array", "minItems": 1, "items": ID}})},
+                    "set": {"type": "array", "description": "The events that give the fact a value (on_done sets facts).",
+                            "items": obj(["value", "fire"], {
+                                "value": SCALAR, "fire": {"type": "array", "minItems": 1, "items": ID}})},
                 })},
             })},
         }),
@@ -549,94 +545,6 @@ def render(doc: dict) -> str:
 SCHEMAS = {"spec.schema.json": schema, "scenario.schema.json": scenario,
            "system.schema.json": system, "properties.schema.json": properties}
 
-# the motion instructions as the add-on instruction calls them, and its scenarios (docs/aoi.md)
-
-SUB_FORMAT = "motionchart-subinstruction/1"
-SCENARIO_FORMAT = "motionchart-aoi-scenario/1"
-
-_ID = {"type": "string", "pattern": "^[A-Za-z_][A-Za-z0-9_]*$"}
-_EXPR = {"type": "string", "minLength": 1}
-_SOURCE = {"type": "string", "minLength": 1}
-_INTERP = {"type": "string", "pattern": "^INT-[0-9]{3}$"}
-_SCALAR = {"type": ["boolean", "integer", "number", "string"]}
-_PROV = {"source": _SOURCE, "interpretation": _INTERP}
-
-
-def schema_object(required, props):
-    """A JSON Schema object with exactly ``props``, of which ``required`` must be present."""
-    return {"type": "object", "additionalProperties": False, "required": list(required), "properties": dict(props)}
-
-
-SUB_SCHEMA = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "https://motionchart.invalid/schema/subinstruction-1.json",
-    "description": "A motion instruction as the add-on instruction calls it: ordered preconditions and completion.",
-    **schema_object(["format", "instruction"], {
-        "format": {"const": SUB_FORMAT},
-        "instruction": schema_object(["mnemonic", "name", "source", "axis_types", "checks", "completes"], {
-            "mnemonic": _ID, "name": {"type": "string"}, **_PROV,
-            "axis_types": {"type": "array", "items": _ID},
-            "checks": {"type": "array", "items": schema_object(["fails", "err", "source"], {
-                "fails": _EXPR, "err": {"type": "integer", "minimum": 1}, **_PROV})},
-            "completes": schema_object(["kind", "source"], {
-                "kind": {"enum": ["home", "move", "gear", "redefine", "stop"]},
-                "scans": {"type": "integer", "minimum": 1}, **_PROV}),
-        }),
-    }),
-}
-
-_AXIS_PROPS = {
-    "type": {"enum": ["AXIS_CIP_DRIVE", "AXIS_VIRTUAL"]},
-    "position": {"type": "number"}, "velocity": {"type": "number"}, "unwind": {"type": "number", "minimum": 0},
-    "homed": {"type": "boolean"}, "energized": {"type": "boolean"}, "faulted": {"type": "boolean"},
-    "shutdown": {"type": "boolean"}, "control_mode": {"enum": ["position", "velocity", "torque", "frequency", "none"]},
-    "direct_control": {"type": "boolean"}, "home_config_ok": {"type": "boolean"}, "home_position": {"type": "number"},
-    "homing": {"type": "boolean"},
-}
-_HANDLER_PROPS = {
-    "id": {"type": "integer", "minimum": 0}, "registered": {"type": "integer", "minimum": 0},
-    "capacity": {"type": "integer", "minimum": 0}, "eState": {"type": "integer"},
-    "mode": {"enum": ["physical", "virtual", "none", "maintenance"]},
-    "phy_axis": _ID, "pth_axis": _ID, "OnPath": {"type": "boolean"},
-}
-_CHART_SETUP = {
-    "state": {**_ID, "description": "start the chart in this state instead of the one the fields give"},
-    "variables": {"type": "object", "propertyNames": _ID, "additionalProperties": _SCALAR,
-                  "description": "chart variables, applied after the state's entry actions"},
-    "events": {"type": "array", "items": _ID, "description": "chart events fired after the set-up, in order"},
-}
-_INPUT_VALUES = {"type": ["boolean", "integer", "number", "string"]}
-SCENARIO_SCHEMA = {
-    "$schema": "https://json-schema.org/draft/2020-12/schema",
-    "$id": "https://motionchart.invalid/schema/aoi-scenario-1.json",
-    "description": "Handlers, axes and add-on instruction instances, then scans with expected observations.",
-    **schema_object(["format", "name", "setup", "steps"], {
-        "format": {"const": SCENARIO_FORMAT}, "name": {"type": "string", "minLength": 1},
-        "description": {"type": "string"}, "sources": {"type": "array", "items": {"type": "string"}},
-        "covers": {"type": "array", "items": {"type": "string"}},
-        "setup": schema_object(["handlers", "axes", "aoi"], {
-            "scan_ms": {"type": "integer", "minimum": 1},
-            "handlers": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                         "additionalProperties": schema_object(["id"], {**_HANDLER_PROPS, **_CHART_SETUP})},
-            "axes": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                     "additionalProperties": schema_object(["type"], {**_AXIS_PROPS, **_CHART_SETUP})},
-            "aoi": {"type": "object", "minProperties": 1, "propertyNames": _ID,
-                    "additionalProperties": {"type": "object", "propertyNames": _ID,
-                                             "additionalProperties": _INPUT_VALUES}},
-        }),
-        "steps": {"type": "array", "minItems": 1, "items": schema_object([], {
-            "name": {"type": "string"}, "scans": {"type": "integer", "minimum": 1, "maximum": 100000},
-            "prescan": {"type": "boolean"},
-            "rungs": {"type": "object", "additionalProperties": {"type": "boolean"}},
-            "operands": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _INPUT_VALUES}},
-            "set": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
-            "events": {"type": "object", "additionalProperties": {"type": "array", "minItems": 1, "items": _ID}},
-            "expect": {"type": "object", "additionalProperties": {"type": "object", "additionalProperties": _SCALAR}},
-        })},
-    }),
-}
-
-SCHEMAS.update({"subinstruction.schema.json": SUB_SCHEMA, "aoi-scenario.schema.json": SCENARIO_SCHEMA})
 
 # the conformance suite: vectors, their manifest and each protocol message (docs/conformance.md)
 from conformance.schemas import SCHEMAS as CONFORMANCE_SCHEMAS

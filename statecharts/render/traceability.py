@@ -6,10 +6,10 @@ Pipeline position: IR + scenario files -> :mod:`statecharts.scenario` (load, run
 What a scenario exercises is read from its *run*, not from its ``covers:`` list: every
 scan's observations give each axis's active leaf state (its ancestors are active too)
 and each tag's ``ER`` / ``ERR`` / ``EXERR`` / ``DN``.  ``covers:`` and ``sources:`` are
-kept to be shown beside the observed facts.  Add-on instruction scenarios
-(``format: motionchart-aoi-scenario/1``, :mod:`statecharts.aoi`) are read the same way
-from their instances' ``Sts_`` members: the recovery-chart states observed, the
-``Sts_ERR`` / ``Sts_EXERR`` seen with ``Sts_ER`` set, and ``Sts_PC``.  A scenario that cannot be loaded or
+kept to be shown beside the observed facts.  An add-on instruction tag of the program
+is read the same way from its ``Sts_`` members: the recovery-chart states observed, the
+``Sts_ERR`` / ``Sts_EXERR`` seen with ``Sts_ER`` set, and ``Sts_PC``; its calls' tags
+(``Sync.MAM``) count as the instructions they run.  A scenario that cannot be loaded or
 crashes is reported, never raised: generated docs must not depend on every scenario
 being valid.
 """
@@ -22,7 +22,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from statecharts import ir
-from statecharts.aoi import AoiScenario
 from statecharts.diagnostics import InputError
 from statecharts.scenario import Scenario, load_scenario, run_scenario, scenario_files
 from statecharts.values import as_int
@@ -96,7 +95,7 @@ _RUNS: dict[tuple[int, str, str, str], tuple[ir.Spec, ScenarioRun]] = {}
 
 
 def _memo_key(spec: ir.Spec, f: Path, shown: str, scenario: object) -> tuple[int, str, str, str] | None:
-    if type(scenario) not in (Scenario, AoiScenario):
+    if type(scenario) is not Scenario:
         return None
     try:
         if not f.is_file():
@@ -143,8 +142,7 @@ def trace(spec: ir.Spec, roots: Sequence[Path | str],
         charts = {a.name: spec.chart(a.chart) for a in scenario.axes}
         add_ons = {a.id for a in spec.add_ons}
         instr = {p.tag: p.instruction for p in scenario.program if p.instruction not in add_ons}
-        instances: set[str] = set(scenario.setup["aoi"]) if isinstance(scenario, AoiScenario) else set()
-        instances |= {p.tag for p in scenario.program if p.instruction in add_ons}
+        instances = {p.tag for p in scenario.program if p.instruction in add_ons}
         if result.rows:  # the MOTION_INSTRUCTION tags of an instance's calls: ``Sync.MAM``
             instr.update({obj: obj.split(".", 1)[1].split("_")[0] for obj in result.rows[0].record.observations
                           if "." in obj and obj.split(".", 1)[0] in instances})

@@ -333,6 +333,10 @@ def _scenario(path: Path, tree: Any, spec: ir.Spec) -> Scenario:
         operands: dict[str, Mapping[str, object]] = {}
         for tag, ops in s.get("operands", {}).items():
             if tag in add_on_tags:
+                for pname in ops:
+                    if any(par.name == pname and par.type == "axis" for par in add_on_tags[tag].parameters):
+                        err((*p, "operands", tag, pname), f"{pname} names the axis the instruction's calls are bound "
+                                                           "to when the program is set up; a step cannot change it")
                 operands[tag] = addon.check_operands(add_on_tags[tag], ops, charts, (*p, "operands", tag), err)
                 continue
             if tag not in tag_ins:

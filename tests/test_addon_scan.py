@@ -45,3 +45,17 @@ def test_the_instance_is_part_of_the_system_state() -> None:
     system.restore(snap)
     assert {k: dict(v) for k, v in system.observe().items()} == before
     assert system.snapshot() == snap
+
+
+def test_a_step_cannot_rebind_an_axis_parameter(tmp_path: Path) -> None:
+    import pytest
+
+    from statecharts.diagnostics import ScenarioError
+    text = HOMING.read_text(encoding="utf-8")
+    marker = '  - name: "rung true; MAH starts"\n'
+    assert marker in text
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(text.replace(marker, marker + "    operands: {Sync: {Ref_AxisPhy: Axis_PTH}}\n"), encoding="utf-8")
+    with pytest.raises(ScenarioError) as exc:
+        load_scenario(bad, SPEC)
+    assert f"{bad}:" in str(exc.value) and "Ref_AxisPhy names the axis" in str(exc.value)

@@ -829,35 +829,14 @@ class Model:
         # what the properties read: the instance and the chart instances (with their parameters)
         key = (k, self.add_ons[k].snapshot(), tuple(a.snapshot() for a in self.axes),
                tuple(tuple(a.env[n] for n in names) for a, names in zip(self.axes, self.param_names) if names))
-        memo = self._add_on_memo.get(key)
-        if memo is None:
-            env = self.add_on_env(k)
-            memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
-            self._add_on_memo[key] = memo
-        for p, ok in zip(inv, memo[0]):
-            if not ok:
-                violated.append(p)
-        for p, ok in zip(reach, memo[1]):
-            if ok:
-                reached.append(p)
+        _evaluate(self._add_on_memo, key, lambda: self.add_on_env(k), inv, reach, violated, reached)
 
     def evaluate_axis(self, ai: int, violated: list[Property], reached: list[Property]) -> None:
         """Axis ``ai``'s invariants violated and goals reached, appended to the lists."""
         inv, reach = self.axis_props[ai]
         if not inv and not reach:
             return
-        key = self.axes[ai].snapshot()
-        memo = self._axis_memo.get(key)
-        if memo is None:
-            env = self.axis_env(ai)
-            memo = (tuple(_holds(p, env, p.holds) for p in inv), tuple(_holds(p, env, p.goal) for p in reach))
-            self._axis_memo[key] = memo
-        for p, ok in zip(inv, memo[0]):
-            if not ok:
-                violated.append(p)
-        for p, ok in zip(reach, memo[1]):
-            if ok:
-                reached.append(p)
+        _evaluate(self._axis_memo, self.axes[ai].snapshot(), lambda: self.axis_env(ai), inv, reach, violated, reached)
 
     def evaluate_tag(self, ti: int, queued: bool, axis_envs: dict[int, dict[str, object]],
                      violated: list[Property], reached: list[Property]) -> None:
@@ -900,6 +879,20 @@ class Model:
             for p, b in zip(s.monitors, memo2[3]):
                 if b:
                     violated.append(p)
+
+
+def _evaluate(memo: dict[Any, tuple[tuple[bool, ...], tuple[bool, ...]]], key: Any,
+              env: Callable[[], Mapping[str, object]], inv: Sequence[Property], reach: Sequence[Property],
+              violated: list[Property], reached: list[Property]) -> None:
+    """Invariants ``inv`` violated and goals ``reach`` reached in the environment ``env()``
+    gives, appended to the lists; the verdicts remembered in ``memo`` under ``key``."""
+    verdicts = memo.get(key)
+    if verdicts is None:
+        e = env()
+        verdicts = (tuple(_holds(p, e, p.holds) for p in inv), tuple(_holds(p, e, p.goal) for p in reach))
+        memo[key] = verdicts
+    violated.extend(p for p, ok in zip(inv, verdicts[0]) if not ok)
+    reached.extend(p for p, ok in zip(reach, verdicts[1]) if ok)
 
 
 def _holds(p: Property, env: Mapping[str, object], e: Expr | None) -> bool:
